@@ -1,0 +1,17 @@
+# dgmm benchmark service: the paper's experiments as one Snakemake DAG.
+# `snakemake --cores 2` runs the full sweep and its report; see README.md.
+from snakemake.utils import min_version
+
+min_version("8.0")
+
+
+configfile: "config.yaml"
+
+
+include: "workflow/rules/common.smk"
+include: "workflow/rules/data.smk"
+
+
+rule all:
+    input:
+        get_final_output(),

@@ -1,0 +1,21 @@
+"""One exception family for dgmm: every message names the input and the problem in one line."""
+
+
+class DgmmError(Exception):
+    """Base class of every error dgmm raises on purpose."""
+
+
+class InputError(DgmmError, ValueError):
+    """Bad array, mesh or parameter given to the library (shape, NaN, empty, degenerate, out of range)."""
+
+
+class DataError(DgmmError):
+    """A data file is missing, corrupt, empty or fails its checksum."""
+
+
+class ConfigError(DgmmError):
+    """A workflow configuration value is missing or invalid."""
+
+
+class FitError(DgmmError):
+    """EM could not continue (for example a covariance that is not positive definite)."""
