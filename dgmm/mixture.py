@@ -1,0 +1,401 @@
+"""Gaussian mixture EM over geometric primitives (points, triangles, Gaussians, ...).
+
+One EM serves every primitive kind (paper §III and eqs. 11–13): a primitive ``p`` with size ``alpha_p``,
+mean ``mu_p`` and covariance ``Sigma_p`` enters only through ``alpha_p``, ``mu_p`` and its second moment
+``E[x xᵀ] = mu_p mu_pᵀ + Sigma_p``. The E- and M-step are the point formulas with ``x xᵀ`` replaced by that
+second moment, so both become one GEMM each over a (n_prims, 11) table of moment features:
+
+* E-step: ``log rho_ip = log lambda_i + log N(mu_p; mu_i, Sigma_i) − ½ tr(Sigma_i⁻¹ Sigma_p)``
+  (= ``log lambda_i + E_{x~p}[log N(x; mu_i, Sigma_i)]``), ``eta_ip = softmax_i(log rho_ip)``.
+* M-step: ``w_ip = eta_ip alpha_p``, ``mu_i = Σ_p w_ip mu_p / W_i``,
+  ``Sigma_i = Σ_p w_ip E_p[x xᵀ] / W_i − mu_i mu_iᵀ + reg_covar I`` (eqs. 12, 13).
+* Bound: ``Σ_p alpha_p logsumexp_i(log rho_ip) / Σ_p alpha_p`` (eq. 11); the mean log-likelihood for points.
+
+Read top to bottom: variants and checks, moment features, E-step, M-step, initialisation, estimator.
+Conventions follow ``sklearn.mixture.GaussianMixture`` (full covariances): ``precisions_cholesky_`` is upper
+triangular ``U`` with precision ``U Uᵀ``; ``reg_covar`` on the diagonal; ``10 eps`` on component masses.
+"""
+from __future__ import annotations
+
+import numbers
+
+import numpy as np
+from sklearn.base import BaseEstimator
+from sklearn.cluster import KMeans
+
+from dgmm.errors import FitError, InputError
+from dgmm.primitives import Primitives, as_primitives
+
+_LOG_2PI = np.log(2.0 * np.pi)
+_EPS = 10.0 * np.finfo(np.float64).eps
+# Upper-triangle entries of a symmetric 3×3 matrix, in the order the feature table uses.
+_ROWS = np.array([0, 1, 2, 0, 0, 1])
+_COLS = np.array([0, 1, 2, 1, 2, 2])
+_SCORE_CHUNK = 1 << 16  # rows per block when scoring, to bound memory at n_rows × n_components
+# Floor for log rho − max before exp: exp(−700) ≈ 1e−304 vanishes beside the row's largest term (1), exactly
+# as 0 would, but keeps exp off its slow underflow/subnormal path (≈10× slower per element).
+_LOG_FLOOR = -700.0
+
+
+def _textbook(sizes):
+    """Textbook EM: the E-step is unscaled and sizes weight the M-step."""
+    return np.ones_like(sizes), sizes
+
+
+def _authors(sizes):
+    """leonidk/direct_gmm's modified scikit-learn 0.20: the E-step's Mahalanobis-plus-trace term is scaled by
+    ``alpha_p / min(alpha)`` and the M-step is not weighted by size (every primitive counts once)."""
+    present = sizes > 0
+    return sizes / sizes[present].min(), present.astype(np.float64)
+
+
+# variant -> function(sizes) -> (E-step scale per primitive, M-step weight per primitive)
+VARIANTS = {"textbook": _textbook, "authors": _authors}
+INITS = ("kmeans", "random")
+
+
+def _is_int(low):
+    return lambda v: isinstance(v, numbers.Integral) and not isinstance(v, bool) and v >= low
+
+
+def _is_real(low):
+    return lambda v: isinstance(v, numbers.Real) and not isinstance(v, bool) and np.isfinite(v) and v >= low
+
+
+# Hyperparameters, checked once at the public boundary: name -> (check, what it must be).
+_PARAMETERS = {
+    "n_components": (_is_int(1), "an integer >= 1"),
+    "init": (lambda v: v in INITS, f"one of {INITS}"),
+    "max_iter": (_is_int(1), "an integer >= 1"),
+    "tol": (_is_real(0), "a finite number >= 0"),
+    "reg_covar": (_is_real(0), "a finite number >= 0"),
+    "variant": (lambda v: v in VARIANTS, f"one of {tuple(VARIANTS)}"),
+    "callback": (lambda v: v is None or callable(v), "None or a callable(iteration, model)"),
+}
+
+
+def _check_array(name, value, shape):
+    """``value`` as a finite float64 array of ``shape``, or an InputError naming it."""
+    array = np.asarray(value, dtype=np.float64)
+    if array.shape != shape:
+        raise InputError(f"{name} must have shape {shape}, got {array.shape}")
+    if not np.all(np.isfinite(array)):
+        raise InputError(f"{name} contains NaN or infinite values")
+    return array
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Moment features: one row per primitive, so that E- and M-step are single matrix products.
+# ---------------------------------------------------------------------------------------------------------
+
+def _moment_features(means, covariances, centre, scale):
+    """Feature table ``(n_prims, 11)`` of the centred moments of primitives given by means and covariances.
+
+    Columns 0–5 hold the upper triangle of ``E[x xᵀ]`` (off-diagonals doubled), 6–8 the mean, 9 a one; all
+    ten multiplied by the E-step ``scale``. Column 10 is an unscaled one that carries the per-component
+    constant. Then ``features @ _component_coefficients(...)ᵀ`` is ``log rho``.
+    """
+    means = means - centre
+    second = covariances + means[:, :, None] * means[:, None, :]
+    features = np.empty((len(means), 11))
+    features[:, :6] = second[:, _ROWS, _COLS]
+    features[:, 3:6] *= 2.0
+    features[:, 6:9] = means
+    features[:, 9] = 1.0
+    features[:, :10] *= np.reshape(scale, (-1, 1))
+    features[:, 10] = 1.0
+    return features
+
+
+def _component_coefficients(weights, means, precisions_cholesky):
+    """Coefficients ``(n_components, 11)`` such that features · coefficients = log rho (E-step).
+
+    ``−½ E_p[(x−mu_i)ᵀ Λ_i (x−mu_i)] = −½ (<Λ_i, E_p[x xᵀ]> − 2 mu_iᵀ Λ_i mu_p + mu_iᵀ Λ_i mu_i)``, plus
+    ``log lambda_i − 3/2 log 2π + ½ log det Λ_i`` on the constant column.
+    """
+    precisions = precisions_cholesky @ np.swapaxes(precisions_cholesky, 1, 2)
+    precision_means = np.einsum("kij,kj->ki", precisions, means)
+    log_det = np.log(np.diagonal(precisions_cholesky, axis1=1, axis2=2)).sum(axis=1)
+    coefficients = np.empty((len(weights), 11))
+    coefficients[:, :6] = -0.5 * precisions[:, _ROWS, _COLS]
+    coefficients[:, 6:9] = precision_means
+    coefficients[:, 9] = -0.5 * np.einsum("ki,ki->k", means, precision_means)
+    with np.errstate(divide="ignore"):
+        coefficients[:, 10] = np.log(weights) - 1.5 * _LOG_2PI + log_det
+    return coefficients
+
+
+# ---------------------------------------------------------------------------------------------------------
+# E-step, M-step
+# ---------------------------------------------------------------------------------------------------------
+
+def _log_rho(features, params, out=None):
+    """Weighted log-probabilities ``log rho`` of shape (n_rows, n_components), written to ``out`` if given.
+
+    Reusing one ``out`` buffer across EM iterations avoids re-faulting a fresh (n_prims, n_components) array
+    every iteration, which costs as much as the product itself.
+    """
+    return np.dot(features, _component_coefficients(*params).T, out=out)
+
+
+def _normalise_in_place(log_rho):
+    """Turn ``log rho`` into responsibilities in place; return ``logsumexp_i log rho`` per row (n_rows,)."""
+    peak = log_rho.max(axis=1)
+    log_rho -= peak[:, None]
+    np.maximum(log_rho, _LOG_FLOOR, out=log_rho)
+    np.exp(log_rho, out=log_rho)
+    total = log_rho.sum(axis=1)
+    log_rho /= total[:, None]
+    return peak + np.log(total)
+
+
+def _e_step(features, params, mstep_weights, out):
+    """Responsibilities (n_prims, n_components), in ``out``, and the bound: the size-weighted mean of the
+    log-normalisers."""
+    resp = _log_rho(features, params, out)
+    log_norm = _normalise_in_place(resp)
+    return resp, np.dot(mstep_weights, log_norm) / mstep_weights.sum()
+
+
+def _m_step(resp, weighted_moments, reg_covar):
+    """Mixture parameters (weights, centred means, precision Choleskys, covariances) from responsibilities.
+
+    ``weighted_moments`` is the unscaled moment table (columns 0–9) times each primitive's M-step weight, so
+    one product gives every component's mass, first and second moment (eqs. 12, 13).
+    """
+    sums = resp.T @ weighted_moments
+    mass = sums[:, 9] + _EPS
+    means = sums[:, 6:9] / mass[:, None]
+    second = np.empty((len(mass), 3, 3))
+    upper = sums[:, :6] / mass[:, None]
+    upper[:, 3:6] *= 0.5
+    second[:, _ROWS, _COLS] = upper
+    second[:, _COLS, _ROWS] = upper
+    covariances = second - means[:, :, None] * means[:, None, :]
+    covariances[:, [0, 1, 2], [0, 1, 2]] += reg_covar
+    return mass / mass.sum(), means, _precisions_cholesky(covariances), covariances
+
+
+def _precisions_cholesky(covariances):
+    """Upper-triangular ``U`` with ``U Uᵀ = Σ⁻¹`` for each component (scikit-learn's convention)."""
+    try:
+        lower = np.linalg.cholesky(covariances)
+    except np.linalg.LinAlgError:
+        raise FitError(
+            "a component covariance is not positive definite: increase reg_covar, reduce n_components "
+            "or check the input for duplicate or degenerate primitives"
+        ) from None
+    return np.swapaxes(np.linalg.inv(lower), 1, 2)
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Initialisation: responsibilities from k-means or uniform random numbers (as scikit-learn).
+# ---------------------------------------------------------------------------------------------------------
+
+def _kmeans_resp(means, weights, n_components, rng):
+    """Hard responsibilities from k-means on the primitive means, weighted by size."""
+    seed = int(rng.integers(np.iinfo(np.int32).max))
+    labels = KMeans(n_clusters=n_components, n_init=1, random_state=seed).fit(means, sample_weight=weights).labels_
+    resp = np.zeros((len(means), n_components))
+    resp[np.arange(len(means)), labels] = 1.0
+    return resp
+
+
+def _random_resp(means, weights, n_components, rng):
+    """Uniform random soft responsibilities, normalised per primitive."""
+    resp = rng.uniform(size=(len(means), n_components))
+    return resp / resp.sum(axis=1, keepdims=True)
+
+
+_INIT_RESP = {"kmeans": _kmeans_resp, "random": _random_resp}
+
+
+# ---------------------------------------------------------------------------------------------------------
+# The estimator
+# ---------------------------------------------------------------------------------------------------------
+
+class GaussianMixture(BaseEstimator):
+    """A full-covariance Gaussian mixture fitted by EM to points, triangles or any primitives.
+
+    Parameters
+    ----------
+    n_components : int, default=1
+    init : {"kmeans", "random"}, default="kmeans"
+        "kmeans": hard labels from k-means on the primitive means weighted by size; "random": uniform random
+        soft responsibilities.
+    max_iter : int, default=25
+    tol : float, default=1e-12
+        EM stops when the bound changes by less than ``tol`` between iterations.
+    reg_covar : float, default=1e-6
+        Added to the diagonal of every covariance.
+    random_state : int, numpy.random.Generator or None, default=None
+        Seeds ``np.random.default_rng``; the same seed gives bit-identical fits.
+    weights_init : array-like of shape (n_components,), optional
+    means_init : array-like of shape (n_components, 3), optional
+    precisions_init : array-like of shape (n_components, 3, 3), optional
+        User starting values; those given replace the ones ``init`` computes.
+    variant : {"textbook", "authors"}, default="textbook"
+        "textbook" is EM for the bound above. "authors" reproduces the authors' published fitting code
+        (E-step Mahalanobis-plus-trace term × ``alpha_p / min(alpha)``, M-step not weighted by size); it is
+        what makes their mesh fits insensitive to random initialisation. Both are the same for points.
+    callback : callable(iteration, model), optional
+        Called after every EM iteration with the current parameters set on the model (logging hooks in here).
+
+    Attributes
+    ----------
+    weights_ : ndarray of shape (n_components,)
+    means_ : ndarray of shape (n_components, 3)
+    covariances_ : ndarray of shape (n_components, 3, 3)
+    precisions_cholesky_ : ndarray of shape (n_components, 3, 3)
+    n_iter_ : int
+    converged_ : bool
+    lower_bound_ : float
+        The bound of the fitted parameters on the training primitives.
+    history_ : list of float
+        The bound after each iteration; ``history_[-1] == lower_bound_``.
+    """
+
+    def __init__(self, n_components=1, *, init="kmeans", max_iter=25, tol=1e-12, reg_covar=1e-6,
+                 random_state=None, weights_init=None, means_init=None, precisions_init=None,
+                 variant="textbook", callback=None):
+        self.n_components = n_components
+        self.init = init
+        self.max_iter = max_iter
+        self.tol = tol
+        self.reg_covar = reg_covar
+        self.random_state = random_state
+        self.weights_init = weights_init
+        self.means_init = means_init
+        self.precisions_init = precisions_init
+        self.variant = variant
+        self.callback = callback
+
+    def _check_parameters(self, prims):
+        for name, (check, expected) in _PARAMETERS.items():
+            value = getattr(self, name)
+            if not check(value):
+                raise InputError(f"GaussianMixture {name}={value!r}: must be {expected}")
+        n_present = int(np.count_nonzero(prims.weights))
+        if self.n_components > n_present:
+            raise InputError(
+                f"n_components={self.n_components} is larger than the {n_present} primitives of positive size"
+            )
+
+    def _initial_params(self, prims, centre, mstep_weights, weighted_moments, rng):
+        """Starting (weights, centred means, precision Choleskys): from ``init``, replaced by user values."""
+        k = self.n_components
+        user = (self.weights_init, self.means_init, self.precisions_init)
+        if any(value is None for value in user):
+            resp = _INIT_RESP[self.init](prims.means, mstep_weights, k, rng)
+            weights, means, prec_chol, _ = _m_step(resp, weighted_moments, self.reg_covar)
+        if self.weights_init is not None:
+            weights = _check_array("weights_init", self.weights_init, (k,))
+            if np.any(weights < 0) or not np.isclose(weights.sum(), 1.0):
+                raise InputError("weights_init must be non-negative and sum to 1")
+        if self.means_init is not None:
+            means = _check_array("means_init", self.means_init, (k, 3)) - centre
+        if self.precisions_init is not None:
+            precisions = _check_array("precisions_init", self.precisions_init, (k, 3, 3))
+            try:  # any factor with U Uᵀ = precision serves; scikit-learn takes the lower Cholesky here too
+                prec_chol = np.linalg.cholesky(precisions)
+            except np.linalg.LinAlgError:
+                raise InputError("precisions_init must be symmetric positive definite") from None
+        return weights, means, prec_chol
+
+    def _store(self, params, centre):
+        weights, means, prec_chol, covariances = params
+        self.weights_ = weights
+        self.means_ = means + centre
+        self.precisions_cholesky_ = prec_chol
+        self.covariances_ = covariances
+
+    def fit(self, X, y=None):
+        """Fit the mixture by EM.
+
+        Parameters
+        ----------
+        X : array-like of shape (n_points, 3), Primitives, or trimesh.Trimesh
+            Points, any primitives, or a mesh (fitted as exact triangles).
+
+        Returns
+        -------
+        self
+        """
+        prims = as_primitives(X)
+        self._check_parameters(prims)
+        scale, mstep_weights = VARIANTS[self.variant](prims.weights)
+        centre = np.average(prims.means, axis=0, weights=mstep_weights)
+        features = _moment_features(prims.means, prims.covariances, centre, scale)
+        weighted_moments = _moment_features(prims.means, prims.covariances, centre, 1.0)[:, :10]
+        weighted_moments *= mstep_weights[:, None]
+        rng = np.random.default_rng(self.random_state)
+
+        weights, means, prec_chol = self._initial_params(prims, centre, mstep_weights, weighted_moments, rng)
+        resp = np.empty((len(prims), self.n_components))
+        resp, bound = _e_step(features, (weights, means, prec_chol), mstep_weights, out=resp)
+        self.history_, self.converged_ = [], False
+        for iteration in range(1, self.max_iter + 1):
+            previous = bound
+            params = _m_step(resp, weighted_moments, self.reg_covar)
+            resp, bound = _e_step(features, params[:3], mstep_weights, out=resp)
+            self._store(params, centre)
+            self.history_.append(float(bound))
+            self.n_iter_ = iteration
+            if self.callback is not None:
+                self.callback(iteration, self)
+            if abs(bound - previous) < self.tol:
+                self.converged_ = True
+                break
+        self.lower_bound_ = float(bound)
+        return self
+
+    # -- evaluation -------------------------------------------------------------------------------------
+
+    def _check_fitted(self):
+        if not hasattr(self, "means_"):
+            raise InputError("this GaussianMixture is not fitted yet: call fit first")
+
+    def _log_rho_blocks(self, prims):
+        """``log rho`` of the fitted mixture (textbook E-step), block by block over the primitives."""
+        self._check_fitted()
+        centre = self.weights_ @ self.means_
+        params = (self.weights_, self.means_ - centre, self.precisions_cholesky_)
+        for start in range(0, len(prims), _SCORE_CHUNK):
+            block = slice(start, start + _SCORE_CHUNK)
+            yield _log_rho(_moment_features(prims.means[block], prims.covariances[block], centre, 1.0), params)
+
+    def _log_norm(self, prims):
+        return np.concatenate([_normalise_in_place(block) for block in self._log_rho_blocks(prims)])
+
+    def score_samples(self, X):
+        """Log-likelihood of each point, shape (n_points,)."""
+        return self._log_norm(Primitives.from_points(X))
+
+    def score(self, X, y=None):
+        """Mean log-likelihood of the points."""
+        return float(self.score_samples(X).mean())
+
+    def score_primitives(self, X):
+        """Size-weighted mean over primitives of the bound ``logsumexp_i(log lambda_i + E_p[log N_i])``.
+
+        For points it is the mean log-likelihood; for a mesh it is the triangle bound of eq. 11, a lower bound
+        of the surface-averaged log-likelihood.
+        """
+        prims = as_primitives(X)
+        return float(np.average(self._log_norm(prims), weights=prims.weights))
+
+    def predict(self, X):
+        """Index of the most responsible component for each point or primitive."""
+        prims = as_primitives(X)
+        return np.concatenate([block.argmax(axis=1) for block in self._log_rho_blocks(prims)])
+
+    def sample(self, n_samples=1):
+        """Draw ``n_samples`` points; returns (X of shape (n_samples, 3), component labels)."""
+        self._check_fitted()
+        if not _is_int(1)(n_samples):
+            raise InputError(f"n_samples={n_samples!r}: must be an integer >= 1")
+        rng = np.random.default_rng(self.random_state)
+        labels = np.sort(rng.choice(self.n_components, size=n_samples, p=self.weights_))
+        lower = np.linalg.cholesky(self.covariances_)
+        noise = rng.standard_normal((n_samples, 3))
+        return self.means_[labels] + np.einsum("nij,nj->ni", lower[labels], noise), labels

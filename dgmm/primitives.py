@@ -1,0 +1,181 @@
+"""Geometric primitives as the moments EM needs: a mean, a covariance and a size each.
+
+A primitive ``p`` enters Gaussian-mixture EM only through its size ``alpha_p`` (area of a triangle, 1 for a
+point), its mean ``mu_p`` and its covariance ``Sigma_p``, the second central moment of the uniform
+distribution over it (paper §III and "Generalization to other primitives"). Arrays are rows of items:
+``means (n_prims, 3)``, ``covariances (n_prims, 3, 3)``, ``weights (n_prims,)``.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from dgmm.errors import InputError
+
+
+def _check_finite(name, array):
+    if not np.all(np.isfinite(array)):
+        raise InputError(f"{name} contains NaN or infinite values")
+
+
+def _as_points(name, array):
+    """Return ``array`` as a float64 array of shape (n, 3), or raise InputError naming it."""
+    try:
+        points = np.asarray(array, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"{name} is not a numeric array: {exc}") from None
+    if points.ndim != 2 or points.shape[1] != 3:
+        raise InputError(f"{name} must have shape (n, 3), got {points.shape}")
+    if len(points) == 0:
+        raise InputError(f"{name} is empty")
+    _check_finite(name, points)
+    return points
+
+
+def triangle_moments(triangles):
+    """Centroid, area and covariance of the uniform distribution over each triangle.
+
+    Parameters
+    ----------
+    triangles : ndarray of shape (n_triangles, 3, 3)
+        Vertices ``A, B, C`` of each triangle, one per row.
+
+    Returns
+    -------
+    centroids : ndarray of shape (n_triangles, 3)
+    areas : ndarray of shape (n_triangles,)
+    covariances : ndarray of shape (n_triangles, 3, 3)
+        ``(A Aᵀ + B Bᵀ + C Cᵀ − 3 m mᵀ) / 12`` with ``m`` the centroid (paper eq. 9, ``cov(△)``).
+    """
+    centroids = triangles.mean(axis=1)
+    crosses = np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0])
+    areas = 0.5 * np.linalg.norm(crosses, axis=1)
+    # Centre on the centroid first: the same formula, without cancellation between large terms.
+    local = triangles - centroids[:, None, :]
+    covariances = np.einsum("tvi,tvj->tij", local, local) / 12.0
+    return centroids, areas, covariances
+
+
+@dataclass(frozen=True)
+class Primitives:
+    """An immutable set of primitives given by their moments.
+
+    Attributes
+    ----------
+    means : ndarray of shape (n_prims, 3)
+    covariances : ndarray of shape (n_prims, 3, 3)
+        Zero for points.
+    weights : ndarray of shape (n_prims,)
+        Size of each primitive (area, or 1 for a point); non-negative, not all zero.
+    """
+
+    means: np.ndarray
+    covariances: np.ndarray
+    weights: np.ndarray
+
+    def __post_init__(self):
+        means = _as_points("primitive means", self.means)
+        n = len(means)
+        covariances = np.asarray(self.covariances, dtype=np.float64)
+        weights = np.asarray(self.weights, dtype=np.float64)
+        if covariances.shape != (n, 3, 3):
+            raise InputError(f"primitive covariances must have shape ({n}, 3, 3), got {covariances.shape}")
+        if weights.shape != (n,):
+            raise InputError(f"primitive weights must have shape ({n},), got {weights.shape}")
+        _check_finite("primitive covariances", covariances)
+        _check_finite("primitive weights", weights)
+        if np.any(weights < 0):
+            raise InputError("primitive weights must be non-negative")
+        if not np.any(weights > 0):
+            raise InputError("primitive weights are all zero")
+        for name, value in (("means", means), ("covariances", covariances), ("weights", weights)):
+            value = value.copy()
+            value.flags.writeable = False
+            object.__setattr__(self, name, value)
+
+    def __len__(self):
+        return len(self.weights)
+
+    @property
+    def second_moments(self):
+        """E[x xᵀ] = μ μᵀ + Σ of each primitive, shape (n_prims, 3, 3)."""
+        return self.covariances + self.means[:, :, None] * self.means[:, None, :]
+
+    @classmethod
+    def from_points(cls, points, weights=None):
+        """Points as primitives: zero covariance, size 1 (or the given weights)."""
+        points = _as_points("points", points)
+        weights = np.ones(len(points)) if weights is None else weights
+        return cls(points, np.zeros((len(points), 3, 3)), weights)
+
+    @classmethod
+    def from_gaussians(cls, means, covariances, weights):
+        """Gaussians (for example another mixture's components) as primitives."""
+        return cls(means, covariances, weights)
+
+    @classmethod
+    def from_mesh(cls, mesh_or_vertices, faces=None):
+        """Triangles of a mesh with their exact moments; zero-area faces are dropped.
+
+        Parameters
+        ----------
+        mesh_or_vertices : trimesh.Trimesh or array-like of shape (n_vertices, 3)
+        faces : array-like of shape (n_faces, 3), optional
+            Vertex indices; required when vertices are given.
+        """
+        if faces is None:
+            if not hasattr(mesh_or_vertices, "faces"):
+                raise InputError("from_mesh needs a trimesh.Trimesh, or vertices and faces")
+            vertices, faces = mesh_or_vertices.vertices, mesh_or_vertices.faces
+        else:
+            vertices = mesh_or_vertices
+        vertices = _as_points("mesh vertices", vertices)
+        faces = np.asarray(faces)
+        if faces.ndim != 2 or faces.shape[1] != 3:
+            raise InputError(f"mesh faces must be triangles of shape (n, 3), got {faces.shape}")
+        if len(faces) == 0:
+            raise InputError("mesh has no faces")
+        if not np.issubdtype(faces.dtype, np.integer):
+            raise InputError(f"mesh faces must be integer vertex indices, got {faces.dtype}")
+        if faces.min() < 0 or faces.max() >= len(vertices):
+            raise InputError(f"mesh faces index vertices outside 0..{len(vertices) - 1}")
+        centroids, areas, covariances = triangle_moments(vertices[faces])
+        keep = areas > 0
+        if not np.any(keep):
+            raise InputError("mesh has no face of positive area")
+        return cls(centroids[keep], covariances[keep], areas[keep])
+
+    def without_covariances(self):
+        """The paper's area × centroid approximation (eq. 5): same means and sizes, zero covariance."""
+        return Primitives(self.means, np.zeros_like(self.covariances), self.weights)
+
+    def transformed(self, rotation, translation):
+        """Primitives moved by ``x ↦ R x + t``: means rotate and shift, covariances become R Σ Rᵀ."""
+        rotation = np.asarray(rotation, dtype=np.float64)
+        translation = np.asarray(translation, dtype=np.float64)
+        if rotation.shape != (3, 3) or translation.shape != (3,):
+            raise InputError("transformed needs a (3, 3) rotation and a (3,) translation")
+        means = self.means @ rotation.T + translation
+        covariances = rotation @ self.covariances @ rotation.T
+        return Primitives(means, covariances, self.weights)
+
+    @staticmethod
+    def concat(*parts):
+        """One set holding every primitive of ``parts`` (sizes kept as they are)."""
+        if not parts:
+            raise InputError("concat needs at least one Primitives")
+        return Primitives(
+            np.concatenate([p.means for p in parts]),
+            np.concatenate([p.covariances for p in parts]),
+            np.concatenate([p.weights for p in parts]),
+        )
+
+
+def as_primitives(data):
+    """Primitives from an (n, 3) array (points), a ``Primitives`` or a ``trimesh.Trimesh`` (triangles)."""
+    if isinstance(data, Primitives):
+        return data
+    if hasattr(data, "faces") and hasattr(data, "vertices"):
+        return Primitives.from_mesh(data)
+    return Primitives.from_points(data)
