@@ -193,14 +193,14 @@ def _time(ns):
     return {"sec": sec, "nsec": nsec}
 
 
-def _xyz(vector, keys="xyz"):
-    """Object with one number per key from a vector of the same length."""
-    return {key: float(value) for key, value in zip(keys, vector, strict=True)}
+def _named(values, keys="xyz"):
+    """``{key: float(value)}`` for matching ``keys`` (a string of names) and ``values`` of the same length."""
+    return {key: float(value) for key, value in zip(keys, values, strict=True)}
 
 
 def _pose(position, quaternion):
     """Foxglove ``Pose`` from a position (3,) and a quaternion (4,) in (x, y, z, w) order."""
-    return {"position": _xyz(position), "orientation": _xyz(quaternion, "xyzw")}
+    return {"position": _named(position), "orientation": _named(quaternion, "xyzw")}
 
 
 def ellipsoid_scene_update(means, covariances, *, log_time_ns, entity_id="mixture", frame_id="world",
@@ -234,8 +234,8 @@ def ellipsoid_scene_update(means, covariances, *, log_time_ns, entity_id="mixtur
     _, half_sizes, quaternions = covariance_ellipsoids(covariances, n_sigma)
     if means.shape != (len(half_sizes), 3):
         raise InputError(f"means must have shape ({len(half_sizes)}, 3), got {means.shape}")
-    rgba = _xyz(color, "rgba")
-    spheres = [{"pose": _pose(mean, quaternion), "size": _xyz(2.0 * half), "color": rgba}
+    rgba = _named(color, "rgba")
+    spheres = [{"pose": _pose(mean, quaternion), "size": _named(2.0 * half), "color": rgba}
                for mean, half, quaternion in zip(means, half_sizes, quaternions)]
     entity = {
         "timestamp": _time(log_time_ns),

@@ -128,6 +128,8 @@ def test_fit_recorder_mcap_reads_back(tmp_path):
     data = blobs()
     seeds = (3, 7)
     models, mcap_path, _ = record_fit(tmp_path, data, seeds)
+    check = subprocess.run([RERUN_CLI, "mcap", "check", str(mcap_path)], capture_output=True, text=True)
+    assert check.returncode == 0, check.stdout + check.stderr
     messages = read_mcap(mcap_path)
 
     for _, schema, message, _ in messages:
