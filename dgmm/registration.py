@@ -486,7 +486,8 @@ def register_p2d(source, mixture, gradient="analytic", callback=None, options=No
     mixture : fitted Gaussian mixture
         See the module docstring for the attributes used.
     gradient : {"analytic", "numeric"}, default="analytic"
-        ``"numeric"`` lets BFGS take forward differences, the paper's setup.
+        ``"numeric"`` lets BFGS take forward differences, the paper's setup; it usually ends on scipy's
+        "precision loss" stop (``converged=False``) near the same optimum.
     callback : callable, optional
         ``callback(iteration, registration)`` after each BFGS iteration with the current pose (for logging the
         moving points: ``registration.apply(source)``).

@@ -1,0 +1,279 @@
+"""Tests of dgmm.registration against independent references: scipy's Rotation, closed-form rotations,
+central finite differences, scikit-learn's log-likelihood and a per-pair loop for the D2D cost."""
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+import trimesh
+from scipy.spatial.transform import Rotation
+from sklearn.mixture import GaussianMixture
+
+from dgmm import InputError
+from dgmm import registration as reg
+
+BUNNY = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "stanford" / "bunny_res4.ply"
+
+
+def _rodrigues(axis, angle_deg):
+    """Rotation of ``angle_deg`` about ``axis``: I + sin θ K + (1 − cos θ) K²."""
+    x, y, z = np.asarray(axis, dtype=float) / np.linalg.norm(axis)
+    k = np.array([[0, -z, y], [z, 0, -x], [-y, x, 0]])
+    theta = np.radians(angle_deg)
+    return np.eye(3) + np.sin(theta) * k + (1 - np.cos(theta)) * k @ k
+
+
+def _random_mixture(rng, n_components):
+    """A mixture with random well-conditioned covariances; precisions_cholesky_ as scikit-learn builds it."""
+    a = rng.normal(size=(n_components, 3, 3))
+    covariances = 0.3 * a @ a.transpose(0, 2, 1) + 0.2 * np.eye(3)
+    lower = np.linalg.cholesky(covariances)
+    weights = rng.uniform(0.5, 1.0, n_components)
+    return SimpleNamespace(weights_=weights / weights.sum(), means_=2 * rng.normal(size=(n_components, 3)),
+                           covariances_=covariances,
+                           precisions_cholesky_=np.linalg.inv(lower).transpose(0, 2, 1))
+
+
+def _transformed_mixture(mixture, rotation, translation):
+    """The mixture of the moved variable ``R x + t``."""
+    covariances = rotation @ mixture.covariances_ @ rotation.T
+    return SimpleNamespace(weights_=mixture.weights_, means_=mixture.means_ @ rotation.T + translation,
+                           covariances_=covariances,
+                           precisions_cholesky_=np.linalg.inv(np.linalg.cholesky(covariances)).transpose(0, 2, 1))
+
+
+def _central_differences(function, x, step):
+    return np.array([(function(x + step * e) - function(x - step * e)) / (2 * step) for e in np.eye(len(x))])
+
+
+def _random_params(rng):
+    """A pose vector (t', q) with an unnormalised quaternion far from the identity."""
+    return np.concatenate([0.5 * rng.normal(size=3), rng.normal(size=4)])
+
+
+@pytest.fixture(scope="module")
+def bunny():
+    if not BUNNY.exists():
+        pytest.skip(f"{BUNNY} not present")
+    vertices = np.asarray(trimesh.load(BUNNY, process=False).vertices)
+    diagonal = float(np.linalg.norm(vertices.max(axis=0) - vertices.min(axis=0)))
+    mixture = GaussianMixture(20, tol=1e-5, max_iter=100, random_state=0).fit(vertices)
+    return SimpleNamespace(vertices=vertices, diagonal=diagonal, mixture=mixture)
+
+
+@pytest.fixture(scope="module")
+def bunny_trial(bunny):
+    """A fixed small rigid motion of the bunny: about 7° and 10% of the diagonal."""
+    centre = bunny.vertices.mean(axis=0)
+    rotation = Rotation.from_euler("xyz", [5.0, -4.0, 3.0], degrees=True).as_matrix()
+    return reg.RigidTrial(rotation, np.array([0.01, -0.02, 0.015]), centre)
+
+
+# ------------------------------------------------------------------------------------------- rotations
+def test_quaternion_to_matrix_matches_scipy():
+    q = np.random.default_rng(1).normal(size=(20, 4))  # unnormalised on purpose
+    expected = Rotation.from_quat(q, scalar_first=True).as_matrix()
+    np.testing.assert_allclose(reg.quaternion_to_matrix(q), expected, atol=1e-14)
+    np.testing.assert_allclose(reg.quaternion_to_matrix(q[3]), expected[3], atol=1e-14)
+
+
+def test_matrix_to_quaternion_round_trip():
+    rotations = Rotation.random(50, rng=np.random.default_rng(2))
+    q = reg.matrix_to_quaternion(rotations.as_matrix())
+    reference = rotations.as_quat(scalar_first=True)
+    sign = np.sign(np.sum(q * reference, axis=1))[:, None]
+    np.testing.assert_allclose(q, sign * reference, atol=1e-12)
+    assert np.all(q[:, 0] >= 0)
+    np.testing.assert_allclose(reg.quaternion_to_matrix(q), rotations.as_matrix(), atol=1e-12)
+
+
+def test_rotvec_round_trip_matches_scipy():
+    v = np.random.default_rng(3).normal(size=(30, 3))
+    v *= (np.random.default_rng(4).uniform(0, np.pi, 30) / np.linalg.norm(v, axis=1))[:, None]
+    rotations = reg.rotvec_to_matrix(v)
+    np.testing.assert_allclose(rotations, Rotation.from_rotvec(v).as_matrix(), atol=1e-14)
+    np.testing.assert_allclose(reg.matrix_to_rotvec(rotations), v, atol=1e-10)
+
+
+def test_euler_is_static_xyz():
+    a, b, c = np.radians([10.0, -7.0, 13.0])
+    rx = np.array([[1, 0, 0], [0, np.cos(a), -np.sin(a)], [0, np.sin(a), np.cos(a)]])
+    ry = np.array([[np.cos(b), 0, np.sin(b)], [0, 1, 0], [-np.sin(b), 0, np.cos(b)]])
+    rz = np.array([[np.cos(c), -np.sin(c), 0], [np.sin(c), np.cos(c), 0], [0, 0, 1]])
+    np.testing.assert_allclose(reg.euler_to_matrix([10.0, -7.0, 13.0]), rz @ ry @ rx, atol=1e-14)
+
+
+@pytest.mark.parametrize("angle", [1e-4, 0.5, 15.0, 90.0, 179.5])
+def test_rotation_distance_is_the_closed_form_angle(angle):
+    rng = np.random.default_rng(5)
+    base = Rotation.random(rng=rng).as_matrix()
+    relative = _rodrigues(rng.normal(size=3), angle)
+    assert reg.rotation_distance_deg(base, base @ relative) == pytest.approx(angle, rel=1e-9, abs=1e-9)
+    assert reg.rotation_distance_deg(relative, np.eye(3)) == pytest.approx(angle, rel=1e-9, abs=1e-9)
+
+
+# ------------------------------------------------------------------------------------ trials and errors
+def test_random_trials_follow_the_protocol():
+    diagonal, centre = 2 * reg.BUNNY_DIAGONAL, np.array([0.1, 0.2, 0.3])
+    trials = reg.random_trials(200, 7, diagonal, centre)
+    angles = Rotation.from_matrix([t.rotation for t in trials]).as_euler("xyz", degrees=True)
+    translations = np.array([t.translation for t in trials])
+    assert np.all(np.abs(angles) <= 15.0) and np.abs(angles).max() > 14.0
+    assert np.all(np.abs(translations) <= 0.1) and np.abs(translations).max() > 0.095
+    again = reg.random_trials(200, 7, diagonal, centre)
+    np.testing.assert_array_equal(translations, [t.translation for t in again])
+    assert not np.allclose(translations, [t.translation for t in reg.random_trials(200, 8, diagonal, centre)])
+
+
+def test_errors_of_the_exact_inverse_and_of_known_offsets():
+    trial = reg.random_trials(1, 11, reg.BUNNY_DIAGONAL, [0.05, -0.02, 0.3])[0]
+    c, r, t = trial.centre, trial.rotation, trial.translation
+    # The inverse of x -> R(x - c) + c + t is y -> Rᵀ y + c - Rᵀ(c + t).
+    exact = reg.Registration(r.T, c - r.T @ (c + t), 0, 0.0, 0.0, True, "test")
+    points = np.random.default_rng(12).normal(size=(10, 3))
+    np.testing.assert_allclose(exact.apply(trial.apply(points)), points, atol=1e-12)
+    assert reg.registration_errors(exact, trial, reg.BUNNY_DIAGONAL) == pytest.approx((0.0, 0.0), abs=1e-9)
+    # Follow the exact inverse by a 3° turn about the centre: 3° of rotation error, none of translation.
+    turn = _rodrigues([1.0, 2.0, -1.0], 3.0)
+    turned = reg.Registration(turn @ exact.rotation, turn @ (exact.translation - c) + c, 0, 0.0, 0.0, True, "t")
+    assert reg.registration_errors(turned, trial, reg.BUNNY_DIAGONAL) == pytest.approx((3.0, 0.0), abs=1e-9)
+    # Or by a shift d: |d| / diagonal percent of translation error.
+    d = np.array([0.001, -0.002, 0.0005])
+    shifted = reg.Registration(exact.rotation, exact.translation + d, 0, 0.0, 0.0, True, "t")
+    expected = 100 * np.linalg.norm(d) / reg.BUNNY_DIAGONAL
+    assert reg.registration_errors(shifted, trial, reg.BUNNY_DIAGONAL) == pytest.approx((0.0, expected), abs=1e-9)
+
+
+# ------------------------------------------------------------------------------------- costs, gradients
+def test_p2d_cost_is_sklearn_negative_mean_log_likelihood():
+    rng = np.random.default_rng(20)
+    points = rng.normal(size=(200, 3)) * [1.0, 2.0, 0.5]
+    mixture = GaussianMixture(5, random_state=0).fit(points)
+    params = _random_params(rng)
+    rotation, translation = reg._pose_from_params(params, points.mean(axis=0))
+    cost = reg._p2d_cost(params, points, points.mean(axis=0), reg._Mixture.from_fitted("m", mixture), False)
+    assert cost == pytest.approx(-mixture.score(points @ rotation.T + translation), rel=1e-12)
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_p2d_gradient_matches_central_differences(seed):
+    rng = np.random.default_rng(seed)
+    mixture = reg._Mixture.from_fitted("m", _random_mixture(rng, 7))
+    points = 2 * rng.normal(size=(40, 3))
+    centre = points.mean(axis=0)
+    params = _random_params(rng)
+    _, gradient = reg._p2d_cost(params, points, centre, mixture, True)
+    numeric = _central_differences(lambda x: reg._p2d_cost(x, points, centre, mixture, False), params, 1e-6)
+    np.testing.assert_allclose(gradient, numeric, rtol=0, atol=1e-7 * np.linalg.norm(numeric))
+
+
+def test_d2d_cost_matches_a_per_pair_loop():
+    rng = np.random.default_rng(30)
+    fixed, moving = _random_mixture(rng, 4), _random_mixture(rng, 3)
+    params = _random_params(rng)
+    centre = reg._Mixture.from_fitted("moving", moving).centroid
+    rotation, translation = reg._pose_from_params(params, centre)
+    expected = 0.0
+    for i in range(4):
+        for j in range(3):
+            y = fixed.means_[i] - translation - rotation @ moving.means_[j]
+            s = fixed.covariances_[i] + rotation @ moving.covariances_[j] @ rotation.T
+            expected -= fixed.weights_[i] * moving.weights_[j] * np.exp(-0.5 * y @ np.linalg.inv(s) @ y)
+    cost = reg._d2d_cost(params, reg._Mixture.from_fitted("f", fixed), reg._Mixture.from_fitted("m", moving),
+                         centre, False)
+    assert cost == pytest.approx(expected, rel=1e-12)
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_d2d_gradient_matches_central_differences(seed):
+    rng = np.random.default_rng(100 + seed)
+    fixed = reg._Mixture.from_fitted("f", _random_mixture(rng, 6))
+    moving = reg._Mixture.from_fitted("m", _random_mixture(rng, 5))
+    params = _random_params(rng)
+    _, gradient = reg._d2d_cost(params, fixed, moving, moving.centroid, True)
+    numeric = _central_differences(lambda x: reg._d2d_cost(x, fixed, moving, moving.centroid, False), params, 1e-6)
+    np.testing.assert_allclose(gradient, numeric, rtol=0, atol=1e-7 * np.linalg.norm(numeric))
+
+
+# ----------------------------------------------------------------------------------- recovering a pose
+@pytest.mark.parametrize("gradient", ["analytic", "numeric"])
+def test_p2d_recovers_a_known_motion(bunny, bunny_trial, gradient):
+    result = reg.register_p2d(bunny_trial.apply(bunny.vertices), bunny.mixture, gradient=gradient)
+    rotation_deg, translation_pct = reg.registration_errors(result, bunny_trial, bunny.diagonal)
+    # Forward differences usually stop on scipy's "precision loss" near the optimum, so only the analytic
+    # gradient is expected to meet BFGS's gradient test.
+    assert result.method == "p2d" and (result.converged or gradient == "numeric")
+    assert rotation_deg < 1.0 and translation_pct < 0.5
+
+
+def test_p2d_callback_sees_every_iteration(bunny, bunny_trial):
+    source = bunny_trial.apply(bunny.vertices)
+    seen = []
+    result = reg.register_p2d(source, bunny.mixture, callback=lambda i, r: seen.append((i, r)))
+    assert [i for i, _ in seen] == list(range(1, result.iterations + 1))
+    np.testing.assert_allclose(seen[-1][1].rotation, result.rotation, atol=1e-12)
+    assert seen[-1][1].objective == pytest.approx(-bunny.mixture.score(seen[-1][1].apply(source)), rel=1e-10)
+
+
+def test_d2d_recovers_a_known_motion(bunny, bunny_trial):
+    # The moving mixture is the fixed one moved by the trial, so the transform to find is the trial's inverse.
+    c, r, t = bunny_trial.centre, bunny_trial.rotation, bunny_trial.translation
+    moving = _transformed_mixture(bunny.mixture, r, c + t - r @ c)
+    result = reg.register_d2d(bunny.mixture, moving)
+    rotation_deg, translation_pct = reg.registration_errors(result, bunny_trial, bunny.diagonal)
+    assert rotation_deg < 0.5 and translation_pct < 0.5
+    start_rotation = r.T @ _rodrigues([0, 1, 1], 2.0)
+    started = reg.register_d2d(bunny.mixture, moving, start_rotation, c - r.T @ (c + t))
+    assert reg.rotation_distance_deg(started.rotation, result.rotation) < 0.05
+
+
+def test_icp_with_exact_correspondences_reaches_the_exact_pose(bunny, bunny_trial):
+    result = reg.register_icp(bunny_trial.apply(bunny.vertices), bunny.vertices)
+    rotation_deg, translation_pct = reg.registration_errors(result, bunny_trial, bunny.diagonal)
+    assert result.converged and rotation_deg < 1e-6 and translation_pct < 1e-6
+
+
+def test_kabsch_with_weights_recovers_the_exact_pose():
+    rng = np.random.default_rng(40)
+    source = rng.normal(size=(25, 3))
+    rotation = Rotation.random(rng=rng).as_matrix()
+    translation = rng.normal(size=3)
+    target = source @ rotation.T + translation
+    target_noisy = target + np.where(np.arange(25)[:, None] < 5, rng.normal(size=(25, 3)), 0.0)
+    weights = (np.arange(25) >= 5).astype(float)  # the noisy pairs get zero weight
+    estimate = reg.kabsch(source, target_noisy, weights)
+    np.testing.assert_allclose(estimate[0], rotation, atol=1e-12)
+    np.testing.assert_allclose(estimate[1], translation, atol=1e-12)
+
+
+def test_cpd_recovers_a_known_motion(bunny, bunny_trial):
+    result = reg.register_cpd(bunny_trial.apply(bunny.vertices), bunny.vertices)
+    rotation_deg, translation_pct = reg.registration_errors(result, bunny_trial, bunny.diagonal)
+    assert result.method == "cpd" and rotation_deg < 0.5 and translation_pct < 0.5
+
+
+# ------------------------------------------------------------------------------------------- bad input
+@pytest.mark.parametrize("source", [np.full((5, 3), np.nan), np.zeros((5, 2)), np.zeros((0, 3)), "abc"])
+def test_bad_points_raise_input_error(source):
+    mixture = _random_mixture(np.random.default_rng(0), 3)
+    with pytest.raises(InputError):
+        reg.register_p2d(source, mixture)
+    with pytest.raises(InputError):
+        reg.register_icp(source, np.zeros((4, 3)))
+
+
+def test_bad_mixtures_and_options_raise_input_error():
+    rng = np.random.default_rng(0)
+    good = _random_mixture(rng, 3)
+    points = rng.normal(size=(10, 3))
+    with pytest.raises(InputError, match="precisions_cholesky_"):
+        reg.register_p2d(points, SimpleNamespace(weights_=good.weights_, means_=good.means_,
+                                                 covariances_=good.covariances_))
+    with pytest.raises(InputError, match="n_components"):
+        reg.register_d2d(good, SimpleNamespace(**{**vars(good), "weights_": np.ones(4) / 4}))
+    with pytest.raises(InputError, match="gradient"):
+        reg.register_p2d(points, good, gradient="central")
+    with pytest.raises(InputError):
+        reg.quaternion_to_matrix(np.zeros(4))
+    with pytest.raises(InputError):
+        reg.random_trials(3, 0, -1.0, np.zeros(3))
