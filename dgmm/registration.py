@@ -454,10 +454,10 @@ def _p2d_cost(params, points, centre, mixture, with_grad):
     # z_nk = Uₖᵀ (y_n − μ_k) for every point and component with one GEMM: U stacked as (3, n_components * 3).
     stacked = mixture.precisions_cholesky.transpose(1, 0, 2).reshape(3, 3 * n_components)
     offsets = np.einsum("kd,kde->ke", mixture.means, mixture.precisions_cholesky).reshape(-1)
-    z = moved @ stacked - offsets
+    z = (moved @ stacked - offsets).reshape(n_points, n_components, 3)
     log_norm = (np.log(mixture.weights) - 1.5 * _LOG_2PI
                 + np.log(np.diagonal(mixture.precisions_cholesky, axis1=1, axis2=2)).sum(axis=1))
-    log_prob = log_norm - 0.5 * (z * z).reshape(n_points, n_components, 3).sum(axis=2)
+    log_prob = log_norm - 0.5 * np.einsum("nke,nke->nk", z, z)
     top = log_prob.max(axis=1, keepdims=True)
     resp = np.exp(log_prob - top)
     total = resp.sum(axis=1, keepdims=True)
@@ -466,7 +466,7 @@ def _p2d_cost(params, points, centre, mixture, with_grad):
         return cost
     resp /= total
     # d cost / d y_n = Σ_k r_nk Uₖ z_nk / n_points  (= Σ_k r_nk Σₖ⁻¹ (y_n − μ_k) / n_points)
-    weighted = (resp[:, :, None] * z.reshape(n_points, n_components, 3)).reshape(n_points, -1)
+    weighted = (resp[:, :, None] * z).reshape(n_points, -1)
     grad_moved = weighted @ stacked.T / n_points
     grad_rotation = grad_moved.T @ local
     grad_quaternion = np.einsum("ab,jab->j", grad_rotation, jacobian)
@@ -667,7 +667,7 @@ def register_icp(source, target, max_iter=50_000, tol=1e-9, callback=None):
                         "icp")
 
 
-def register_cpd(source, target, max_iter=150, tol=1e-9):
+def register_cpd(source, target, max_iter=150, tol=1e-9, callback=None):
     """Rigid Coherent Point Drift through pycpd, moving ``source`` onto ``target``.
 
     pycpd's rigid model also fits a scale; like the authors, the rigid part is read back as the Kabsch fit of
@@ -681,6 +681,8 @@ def register_cpd(source, target, max_iter=150, tol=1e-9):
         pycpd's ``X``.
     max_iter : int, default=150
     tol : float, default=1e-9
+    callback : callable, optional
+        ``callback(iteration, registration)`` after every EM iteration with the current rigid part.
 
     Returns
     -------
@@ -694,7 +696,13 @@ def register_cpd(source, target, max_iter=150, tol=1e-9):
         raise InputError(f"max_iter must be >= 1 and tol >= 0, got {max_iter} and {tol}")
     start = time.perf_counter()
     cpd = RigidRegistration(X=target, Y=source, max_iterations=max_iter, tolerance=tol)
-    moved, _ = cpd.register()
+
+    def report(iteration, error, X, Y):
+        rotation, translation = kabsch(source, Y)
+        callback(iteration, Registration(rotation, translation, iteration, time.perf_counter() - start,
+                                         float(error), False, "cpd"))
+
+    moved, _ = cpd.register(None if callback is None else report)
     rotation, translation = kabsch(source, moved)
     return Registration(rotation, translation, int(cpd.iteration), time.perf_counter() - start, float(cpd.q),
                         bool(cpd.diff <= tol), "cpd")

@@ -1,5 +1,6 @@
 """Tests of dgmm.registration against independent references: scipy's Rotation, closed-form rotations,
 central finite differences, scikit-learn's log-likelihood and a per-pair loop for the D2D cost."""
+from functools import partial
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -250,6 +251,15 @@ def test_cpd_recovers_a_known_motion(bunny, bunny_trial):
     result = reg.register_cpd(bunny_trial.apply(bunny.vertices), bunny.vertices)
     rotation_deg, translation_pct = reg.registration_errors(result, bunny_trial, bunny.diagonal)
     assert result.method == "cpd" and rotation_deg < 0.5 and translation_pct < 0.5
+
+
+@pytest.mark.parametrize("register", [reg.register_icp, partial(reg.register_cpd, max_iter=20)])
+def test_point_set_callbacks_see_every_iteration(bunny, bunny_trial, register):
+    source = bunny_trial.apply(bunny.vertices)
+    seen = []
+    result = register(source, bunny.vertices, callback=lambda i, r: seen.append((i, r)))
+    assert [i for i, _ in seen] == list(range(1, result.iterations + 1))
+    np.testing.assert_allclose(seen[-1][1].apply(source), result.apply(source), atol=1e-12)
 
 
 # ------------------------------------------------------------------------------------------- bad input
