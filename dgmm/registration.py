@@ -145,8 +145,7 @@ def matrix_to_quaternion(rotations):
     -------
     quaternions : ndarray of shape (4,) or (n_rotations, 4)
     """
-    q = Rotation.from_matrix(_as_rotations("rotations", rotations)).as_quat(canonical=True, scalar_first=True)
-    return q
+    return Rotation.from_matrix(_as_rotations("rotations", rotations)).as_quat(canonical=True, scalar_first=True)
 
 
 def rotvec_to_matrix(rotvecs):
@@ -608,8 +607,7 @@ def kabsch(source, target, weights=None):
     source_mean, target_mean = w @ source, w @ target
     cross = (source - source_mean).T @ ((target - target_mean) * w[:, None])
     u, _, vt = np.linalg.svd(cross)
-    reflection = np.sign(np.linalg.det(vt.T @ u.T)) or 1.0
-    rotation = vt.T @ np.diag([1.0, 1.0, reflection]) @ u.T
+    rotation = vt.T @ np.diag([1.0, 1.0, np.sign(np.linalg.det(vt.T @ u.T))]) @ u.T
     return rotation, target_mean - rotation @ source_mean
 
 
