@@ -32,14 +32,16 @@ _EPS = 10.0 * np.finfo(np.float64).eps
 _ROWS = np.array([0, 1, 2, 0, 0, 1])
 _COLS = np.array([0, 1, 2, 1, 2, 2])
 _SCORE_CHUNK = 1 << 16  # rows per block when scoring, to bound memory at n_rows × n_components
-# Floor for log rho − max before exp: exp(−700) ≈ 1e−304 vanishes beside the row's largest term (1), exactly
-# as 0 would, but keeps exp off its slow underflow/subnormal path (≈10× slower per element).
-_LOG_FLOOR = -700.0
+# Floor for log rho − max before exp. exp(−300) ≈ 5e−131 vanishes beside the row's largest term (1) exactly as
+# 0 would, but keeps exp off its slow underflow path and keeps responsibility × moment products in the M-step
+# GEMM from becoming subnormal (each ≈10× slower per element).
+_LOG_FLOOR = -300.0
 
 
 def _textbook(sizes):
-    """Textbook EM: the E-step is unscaled and sizes weight the M-step."""
-    return np.ones_like(sizes), sizes
+    """Textbook EM: the E-step is unscaled and sizes weight the M-step (rescaled to mean 1, so that masses
+    count primitives whatever the units, as scikit-learn's ``10 eps`` on masses assumes)."""
+    return np.ones_like(sizes), sizes / sizes.mean()
 
 
 def _authors(sizes):
