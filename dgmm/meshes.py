@@ -103,10 +103,20 @@ def monte_carlo(vertices, faces, n_points):
 
 
 def _result(meshset):
-    """Vertices and faces of the current mesh without unreferenced vertices."""
+    """Vertices and faces of the current mesh without unreferenced vertices, in a canonical order.
+
+    Vertices are sorted lexicographically and faces by their vertex indices, each face rotated (orientation kept)
+    to start at its smallest index. Clustering emits its cells in hash-table order, which changes from run to run;
+    the canonical order makes the same mesh the same bytes.
+    """
     meshset.meshing_remove_unreferenced_vertices()
     mesh = meshset.current_mesh()
-    return mesh.vertex_matrix(), mesh.face_matrix().astype(np.int64)
+    vertices, faces = mesh.vertex_matrix(), mesh.face_matrix().astype(np.int64)
+    order = np.lexsort(vertices.T[::-1])
+    faces = np.argsort(order)[faces]
+    rows = np.arange(len(faces))[:, None]
+    faces = faces[rows, (faces.argmin(axis=1)[:, None] + np.arange(3)) % 3]
+    return vertices[order], faces[np.lexsort(faces.T[::-1])]
 
 
 def decimate_quadric(vertices, faces, n_faces):
