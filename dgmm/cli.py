@@ -1,0 +1,442 @@
+"""The ``dgmm`` command line: fit, score, register with, sample and view Gaussian mixtures of meshes and points.
+
+``dgmm COMMAND --help`` describes each command with an example. Inputs are any mesh or point cloud trimesh reads
+(ply, obj, off, stl, xyz, ...), read as one of the input kinds of :data:`INPUT_KINDS`; models are ``.npz`` files
+(:mod:`dgmm.model_io`). Every error is one line on stderr, ``dgmm: error: ...``, with exit status 2 for bad
+usage or bad input and 1 for anything else; ``--debug`` adds the traceback.
+"""
+import argparse
+import json
+import shutil
+import subprocess
+import sys
+import traceback
+from contextlib import ExitStack
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+import trimesh
+from tqdm import tqdm
+
+from dgmm import __version__
+from dgmm.data import load_mesh, load_points, save_ply
+from dgmm.errors import DataError, DgmmError, InputError
+from dgmm.mixture import INITS, VARIANTS, GaussianMixture
+from dgmm.model_io import load_model, save_model
+from dgmm.primitives import Primitives, as_primitives
+from dgmm.recording import FitRecorder, RerunRecorder
+from dgmm.registration import register_cpd, register_icp, register_p2d
+
+BAD_INPUT = 2
+"""Exit status for bad usage (argparse's own) and for bad input: any :class:`~dgmm.errors.DgmmError`."""
+
+FAILURE = 1
+"""Exit status for any other failure (file system, interrupted viewer, bugs)."""
+
+PROGRESS_DELAY = 1.0
+"""Seconds a fit runs before its progress bar appears (on a terminal only)."""
+
+_ESTIMATOR_PARAMS = ("n_components", "init", "max_iter", "tol", "reg_covar", "variant", "random_state")
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Inputs
+# ---------------------------------------------------------------------------------------------------------
+
+def _require_file(path):
+    """Return ``path`` as a Path, or raise a DataError if it is not an existing file."""
+    path = Path(path)
+    if not path.is_file():
+        raise DataError(f"{path}: no such file")
+    return path
+
+
+def _read_mesh(path):
+    """The triangles of a mesh file as a ``trimesh.Trimesh`` (fitted as exact triangles, recorded as a mesh)."""
+    vertices, faces = load_mesh(path)
+    return trimesh.Trimesh(vertices, faces, process=False)
+
+
+def _read_approx(path):
+    """The triangles of a mesh file as area-weighted centroids: the paper's approximation (eq. 5)."""
+    return Primitives.from_mesh(*load_mesh(path)).without_covariances()
+
+
+# kind -> (reader(path) -> data for GaussianMixture.fit and score_primitives, help text)
+INPUT_KINDS = {
+    "mesh": (_read_mesh, "exact triangles: centroid, area and covariance of each face"),
+    "approx": (_read_approx, "area-weighted face centroids, no triangle covariance (the paper's approximation)"),
+    "points": (load_points, "the file's vertices (or points) as points"),
+}
+
+
+def read_input(path, kind=None):
+    """Read a mesh or point-cloud file as the primitives of one input kind.
+
+    Parameters
+    ----------
+    path : str or path-like
+    kind : {"mesh", "approx", "points"}, optional
+        See :data:`INPUT_KINDS`. By default "mesh" if the file has faces, else "points".
+
+    Returns
+    -------
+    kind : str
+        The kind read.
+    data : trimesh.Trimesh, Primitives or ndarray of shape (n_points, 3)
+
+    Raises
+    ------
+    DataError
+        The file is missing, unreadable, or (for "mesh" and "approx") has no faces.
+    """
+    path = _require_file(path)
+    if kind is not None:
+        return kind, INPUT_KINDS[kind][0](path)
+    try:
+        return "mesh", _read_mesh(path)
+    except DataError as mesh_error:
+        try:
+            return "points", load_points(path)
+        except DataError:
+            raise mesh_error from None
+
+
+# ---------------------------------------------------------------------------------------------------------
+# fit
+# ---------------------------------------------------------------------------------------------------------
+
+def _progress_bar(total):
+    """A tqdm bar over EM iterations, on stderr, shown only on a terminal and only for fits that take a while."""
+    return tqdm(total=total, desc="EM", unit="it", disable=not sys.stderr.isatty(), delay=PROGRESS_DELAY,
+                leave=False)
+
+
+def _progress_callback(bar):
+    """EM callback moving ``bar`` to the current iteration and showing the bound."""
+    def advance(iteration, model):
+        bar.set_postfix(bound=f"{model.history_[-1]:.6g}", refresh=False)
+        bar.update(iteration - bar.n)
+    return advance
+
+
+def _open_recorder(stack, mcap, rrd, params, data, seed):
+    """Open the recorders asked for on ``stack``.
+
+    Returns
+    -------
+    callback : callable(iteration, model) or None
+    finish : callable(model) or None
+        To call with the fitted model before ``stack`` closes.
+    """
+    if mcap is not None:
+        recorder = stack.enter_context(FitRecorder(mcap, rrd, params=params, data=data))
+        recorder.begin_seed(seed)
+        return recorder, recorder.end_seed
+    if rrd is not None:
+        recorder = stack.enter_context(RerunRecorder(rrd))
+        recorder.log_input(data)
+        return recorder, None
+    return None, None
+
+
+def _chain(*callbacks):
+    """One EM callback calling each of ``callbacks`` that is not None, in order."""
+    active = [callback for callback in callbacks if callback is not None]
+
+    def call_all(iteration, model):
+        for callback in active:
+            callback(iteration, model)
+    return call_all
+
+
+def _fit(args):
+    """Fit a mixture to ``args.input``, save it to ``args.output``, optionally record the fit."""
+    kind, data = read_input(args.input, args.kind)
+    model = GaussianMixture(args.k, init=args.init, max_iter=args.iterations, random_state=args.seed,
+                            variant=args.variant)
+    n_prims = len(as_primitives(data))
+    params = {"dgmm_version": __version__, "input": str(args.input), "as": kind, "n_prims": n_prims,
+              **{name: getattr(model, name) for name in _ESTIMATOR_PARAMS}}
+    with ExitStack() as stack:
+        bar = stack.enter_context(_progress_bar(args.iterations))
+        record, finish = _open_recorder(stack, args.mcap, args.rrd, params, data, args.seed)
+        model.set_params(callback=_chain(_progress_callback(bar), record))
+        try:
+            model.fit(data)
+        except InputError as exc:
+            raise InputError(f"{args.input}: {exc}") from None
+        if finish is not None:
+            finish(model)
+        save_model(args.output, model, {**params, "n_iter": model.n_iter_, "converged": model.converged_,
+                                        "lower_bound": model.lower_bound_, "history": model.history_})
+    print(f"{args.output}: {args.k} components fitted to {n_prims} primitives ({kind}) of {args.input}; "
+          f"bound {model.lower_bound_:.6g} after {model.n_iter_} iterations")
+
+
+def _fit_arguments(parser):
+    parser.add_argument("input", type=Path, metavar="INPUT", help="mesh or point cloud file")
+    parser.add_argument("-k", "--components", dest="k", type=_positive_int, required=True, metavar="K",
+                        help="number of mixture components")
+    parser.add_argument("-o", "--output", type=Path, required=True, metavar="MODEL.npz", help="model file to write")
+    parser.add_argument("--init", choices=INITS, default="kmeans", help="initialisation (default: %(default)s)")
+    _kind_argument(parser)
+    parser.add_argument("--iterations", type=_positive_int, default=25, metavar="N",
+                        help="maximum EM iterations (default: %(default)s)")
+    parser.add_argument("--seed", type=_seed, default=0, metavar="S", help="random seed (default: %(default)s)")
+    parser.add_argument("--variant", choices=tuple(VARIANTS), default="textbook",
+                        help="EM variant: textbook EM, or the authors' published code (default: %(default)s)")
+    parser.add_argument("--mcap", type=Path, metavar="F", help="record every EM iteration to this MCAP file")
+    parser.add_argument("--rrd", type=Path, metavar="F", help="record the fit to this rerun recording (.rrd)")
+
+
+# ---------------------------------------------------------------------------------------------------------
+# score, register, sample, view
+# ---------------------------------------------------------------------------------------------------------
+
+def _score(args):
+    """Print the mean log-likelihood of points, or the size-weighted triangle bound of a mesh (eq. 11)."""
+    model, _ = load_model(args.model)
+    _, data = read_input(args.input, args.kind)
+    print(repr(model.score_primitives(data)))
+
+
+def _score_arguments(parser):
+    parser.add_argument("model", type=Path, metavar="MODEL", help="model file written by dgmm fit")
+    parser.add_argument("input", type=Path, metavar="INPUT", help="mesh or point cloud file")
+    _kind_argument(parser)
+
+
+# method -> function(source points, model, target thunk) -> Registration; only point-to-point methods call target
+_METHODS = {
+    "p2d": lambda source, model, target: register_p2d(source, model),
+    "icp": lambda source, model, target: register_icp(source, target()),
+    "cpd": lambda source, model, target: register_cpd(source, target()),
+}
+
+
+def _register(args):
+    """Register points to a model and print the pose as JSON."""
+    model, _ = load_model(args.model)
+    _, source = read_input(args.points, "points")
+    if args.method == "p2d" and (args.target is not None or args.samples is not None):
+        raise InputError("--target and --samples are for icp and cpd; p2d registers to the model itself")
+
+    def target():
+        if args.target is not None:
+            return read_input(args.target, "points")[1]
+        model.random_state = args.seed
+        return model.sample(args.samples or len(source))[0]
+
+    result = _METHODS[args.method](source, model, target)
+    pose = {
+        "method": result.method,
+        "rotation": result.rotation.tolist(),
+        "translation": result.translation.tolist(),
+        "quaternion_wxyz": result.quaternion.tolist(),
+        "iterations": result.iterations,
+        "converged": result.converged,
+        "objective": result.objective,
+        "seconds": result.seconds,
+    }
+    print("{\n" + ",\n".join(f"  {json.dumps(key)}: {json.dumps(value)}" for key, value in pose.items()) + "\n}")
+
+
+def _register_arguments(parser):
+    parser.add_argument("model", type=Path, metavar="MODEL", help="model file written by dgmm fit")
+    parser.add_argument("points", type=Path, metavar="POINTS", help="points to move (the vertices of a mesh file)")
+    parser.add_argument("--method", choices=tuple(_METHODS), default="p2d",
+                        help="p2d: maximise the points' likelihood under the model; icp, cpd: register the "
+                             "points to target points (default: %(default)s)")
+    parser.add_argument("--target", type=Path, metavar="FILE",
+                        help="icp/cpd: target points (the vertices of a mesh file); default: points sampled "
+                             "from the model")
+    parser.add_argument("--samples", type=_positive_int, metavar="N",
+                        help="icp/cpd without --target: how many points to sample from the model "
+                             "(default: as many as POINTS)")
+    parser.add_argument("--seed", type=_seed, default=0, metavar="S",
+                        help="random seed of the model samples (default: %(default)s)")
+
+
+def _sample(args):
+    """Draw points from a model and write them as a PLY point cloud."""
+    model, _ = load_model(args.model)
+    model.random_state = args.seed
+    points, _ = model.sample(args.n)
+    save_ply(args.output, points)
+    print(f"{args.output}: {args.n} points sampled from {args.model}")
+
+
+def _sample_arguments(parser):
+    parser.add_argument("model", type=Path, metavar="MODEL", help="model file written by dgmm fit")
+    parser.add_argument("-n", type=_positive_int, required=True, metavar="N", help="number of points")
+    parser.add_argument("-o", "--output", type=Path, required=True, metavar="OUT.ply", help="PLY file to write")
+    parser.add_argument("--seed", type=_seed, default=0, metavar="S", help="random seed (default: %(default)s)")
+
+
+def viewer_command(path):
+    """The command that opens ``path`` in the rerun viewer.
+
+    The ``rerun`` program installed beside this Python (by rerun-sdk, so of the version that wrote dgmm's
+    recordings) is preferred over one on ``PATH``.
+
+    Parameters
+    ----------
+    path : str or path-like
+        An existing ``.rrd`` recording (or any file the viewer opens, such as ``.mcap``).
+
+    Returns
+    -------
+    list of str
+
+    Raises
+    ------
+    DataError
+        ``path`` does not exist.
+    DgmmError
+        No ``rerun`` program is installed.
+    """
+    path = _require_file(path)
+    beside = Path(sys.executable).parent / "rerun"
+    program = str(beside) if beside.is_file() else shutil.which("rerun")
+    if program is None:
+        raise DgmmError("the rerun viewer is not installed (pip install rerun-sdk)")
+    return [program, str(path)]
+
+
+def _view(args):
+    """Open a recording in the rerun viewer; the viewer's exit status is the command's."""
+    return subprocess.run(viewer_command(args.file), check=False).returncode
+
+
+def _view_arguments(parser):
+    parser.add_argument("file", type=Path, metavar="FILE.rrd", help="rerun recording written by dgmm fit --rrd")
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Parser
+# ---------------------------------------------------------------------------------------------------------
+
+def _positive_int(text):
+    """argparse type: an integer >= 1."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"{text!r} is not an integer >= 1")
+    return value
+
+
+def _seed(text):
+    """argparse type: a non-negative integer seed."""
+    if not text.isdigit():
+        raise argparse.ArgumentTypeError(f"{text!r} is not a non-negative integer")
+    return int(text)
+
+
+def _kind_argument(parser):
+    """The ``--as`` option shared by the commands that read an input file."""
+    kinds = "; ".join(f"{name}: {text}" for name, (_, text) in INPUT_KINDS.items())
+    parser.add_argument("--as", dest="kind", choices=tuple(INPUT_KINDS),
+                        help=f"how to read INPUT ({kinds}); default: mesh if the file has faces, else points")
+
+
+@dataclass(frozen=True)
+class Command:
+    """One subcommand: what it does, an example, its arguments and the function that runs it.
+
+    Attributes
+    ----------
+    summary : str
+    example : str
+        Shown under ``--help``.
+    add_arguments : callable(argparse.ArgumentParser)
+    run : callable(argparse.Namespace) -> int or None
+        Returns the exit status; None means 0.
+    """
+
+    summary: str
+    example: str
+    add_arguments: Callable
+    run: Callable
+
+
+COMMANDS = {
+    "fit": Command("fit a Gaussian mixture to a mesh or a point cloud and save it",
+                   "dgmm fit bunny.ply -k 25 -o bunny.npz --rrd bunny.rrd", _fit_arguments, _fit),
+    "score": Command("print the mean log-likelihood of points, or the triangle bound of a mesh, under a model",
+                     "dgmm score bunny.npz bunny_points.ply", _score_arguments, _score),
+    "register": Command("find the rigid pose x -> R x + t that moves POINTS onto a model; print it as JSON",
+                        "dgmm register bunny.npz moved_bunny.ply --method p2d", _register_arguments, _register),
+    "sample": Command("draw points from a model into a PLY point cloud",
+                      "dgmm sample bunny.npz -n 10000 -o bunny_samples.ply", _sample_arguments, _sample),
+    "view": Command("open a rerun recording in the rerun viewer", "dgmm view bunny.rrd", _view_arguments, _view),
+}
+
+
+class _Parser(argparse.ArgumentParser):
+    """ArgumentParser whose usage errors are one line: ``dgmm: error: ... (see 'dgmm fit --help')``."""
+
+    def error(self, message):
+        self.exit(BAD_INPUT, f"dgmm: error: {message} (see '{self.prog} --help')\n")
+
+
+def build_parser():
+    """The ``dgmm`` argument parser, one subparser per entry of :data:`COMMANDS`."""
+    parser = _Parser(prog="dgmm", description="Fit, score, register with, sample and view Gaussian mixtures of "
+                                              "meshes and point clouds (Keselman & Hebert, 2019).",
+                     epilog="run 'dgmm COMMAND --help' for a command's options and an example")
+    parser.add_argument("--version", action="version", version=f"dgmm {__version__}")
+    parser.add_argument("--debug", action="store_true", help="show the traceback of an error")
+    commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    for name, command in COMMANDS.items():
+        sub = commands.add_parser(name, help=command.summary, description=command.summary,
+                                  epilog=f"example:\n  {command.example}",
+                                  formatter_class=argparse.RawDescriptionHelpFormatter)
+        sub.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
+                         help="show the traceback of an error")
+        command.add_arguments(sub)
+        sub.set_defaults(run=command.run)
+    return parser
+
+
+def _describe(exc):
+    """One line describing ``exc`` for stderr."""
+    if isinstance(exc, (DgmmError, OSError)):
+        text = str(exc)
+    else:
+        text = f"unexpected {type(exc).__name__}: {exc} (run with --debug for the traceback)"
+    return " ".join(text.split())
+
+
+def main(argv=None):
+    """Run the ``dgmm`` command line.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        Arguments after the program name; default ``sys.argv[1:]``.
+
+    Returns
+    -------
+    int
+        Exit status: 0 on success, :data:`BAD_INPUT` for bad usage or input, :data:`FAILURE` otherwise (130 when
+        interrupted).
+    """
+    args = build_parser().parse_args(argv)
+    try:
+        return args.run(args) or 0
+    except KeyboardInterrupt:
+        print("dgmm: interrupted", file=sys.stderr)
+        return 130
+    except Exception as exc:  # every failure becomes one line (and the traceback with --debug)
+        if args.debug:
+            traceback.print_exc()
+        print(f"dgmm: error: {_describe(exc)}", file=sys.stderr)
+        return BAD_INPUT if isinstance(exc, DgmmError) else FAILURE
+
+
+if __name__ == "__main__":
+    sys.exit(main())
