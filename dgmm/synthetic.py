@@ -1,0 +1,335 @@
+"""A synthetic TUM RGB-D sequence: ray-cast depth of a small room along a hand-held-like camera path.
+
+Stands in for TUM fr3/long_office_household (paper §V) where the real sequence is absent, in exactly its
+format (see ``dgmm.odometry``): ``depth.txt``, ``depth/<timestamp>.png`` (16-bit, metres × 5000, 640×480) and
+``groundtruth.txt`` at 100 Hz like TUM's motion capture. No RGB images and no ``rgb.txt`` are written; nothing in
+dgmm reads them.
+
+- **Scene**: a room (floor at z = 0, world z up) with furniture-sized boxes and, optionally, scanned models (e.g.
+  the Stanford bunny) scaled to ``model_height`` and standing on the table and the cabinet. Scenes are triangle
+  soups in (n_triangles, 3, 3) float form.
+- **Camera path**: smooth slow sinusoids in position (≈0.3 m/s) and a look-at target, a slow roll, and a small
+  jitter of higher-frequency sinusoids (1–4 Hz, mm and tenths of a degree), all phases and frequencies drawn
+  from the seed. Ground truth is sampled at 100 Hz; depth frame ``k`` is taken at the 100 Hz sample nearest
+  ``k / 30`` s (frame intervals of 30 or 40 ms, 30 Hz on average), so each frame has an exact ground-truth row
+  and association by nearest timestamp recovers it.
+- **Rendering**: exact ray casting (Möller–Trumbore, vectorised as three matrix products because all rays of a
+  frame share the optical centre) of the pixels ``u, v = 0, step, 2 step, …``; each ``step × step`` block of
+  the 640×480 image takes its top-left pixel's value (``step=4``: the 160×120 grid the odometry reads is exact;
+  ``step=1`` renders every pixel, ~16× slower).
+- **Kinect noise** (Nguyen, Izadi & Lovell 2012, axial model): ``Z + N(0, σ²)``, ``σ = 0.0012 + 0.0019 (Z −
+  0.4)²`` m; 0 (no return) outside [0.4, 4.5] m, at incidence angles above 75°, where no surface is hit, and at
+  1% random dropouts; then quantised to the PNG's 1/5000 m.
+
+Every random choice comes from ``np.random.SeedSequence(seed)``: the same seed writes the same bytes.
+"""
+from __future__ import annotations
+
+import os
+import shutil
+import tempfile
+from pathlib import Path
+
+import numpy as np
+import trimesh
+from scipy.spatial.transform import Rotation
+
+from dgmm.errors import InputError
+from dgmm.odometry import FR3, PIXEL_STEP, Trajectory, read_sequence, write_depth, write_trajectory
+
+TUM_EPOCH = 1341847980.0
+"""First timestamp of the sequence (s), of the magnitude of fr3's Unix times, so parsing precision is exercised."""
+
+GROUNDTRUTH_RATE = 100.0
+FRAME_RATE = 30.0
+ROOM_SIZE = (5.0, 4.0, 2.6)
+"""Room extents in x, y, z (m), centred on x = y = 0, floor at z = 0."""
+
+# Furniture as (centre, extents) in metres: a table, a cabinet, a shelf and two boxes.
+FURNITURE = (
+    ((0.0, 1.2, 0.375), (1.4, 0.8, 0.75)),
+    ((-1.9, 1.45, 0.6), (0.8, 0.5, 1.2)),
+    ((2.05, 0.5, 0.9), (0.4, 1.2, 1.8)),
+    ((0.95, 1.6, 0.2), (0.4, 0.4, 0.4)),
+    ((-0.45, 1.35, 0.85), (0.3, 0.25, 0.2)),
+)
+# Where models stand: (x, y, z of the supporting top), on the table and on the cabinet.
+MODEL_SPOTS = ((0.25, 1.1, 0.75), (-1.9, 1.45, 1.2))
+
+MIN_RANGE, MAX_RANGE = 0.4, 4.5
+MAX_INCIDENCE_DEG = 75.0
+DROPOUT = 0.01
+
+
+def _box_triangles(centre, extents):
+    """The 12 triangles of an axis-aligned box, shape (12, 3, 3)."""
+    box = trimesh.creation.box(extents=extents)
+    return box.triangles + np.asarray(centre)
+
+
+def room_scene(models=(), model_height=0.45):
+    """Triangles of the room, its furniture and up to two models standing on the table and the cabinet.
+
+    Parameters
+    ----------
+    models : sequence of array-like of shape (n_triangles, 3, 3)
+        Triangle soups with +y up, as the Stanford scans are (e.g. ``vertices[faces]``); each is turned z-up,
+        scaled to ``model_height`` and set on ``MODEL_SPOTS`` in order.
+    model_height : float
+        Metres.
+
+    Returns
+    -------
+    triangles : ndarray of shape (n_triangles, 3, 3)
+    """
+    if len(models) > len(MODEL_SPOTS):
+        raise InputError(f"room_scene places at most {len(MODEL_SPOTS)} models, got {len(models)}")
+    parts = [_box_triangles((0.0, 0.0, ROOM_SIZE[2] / 2), ROOM_SIZE)]
+    parts += [_box_triangles(centre, extents) for centre, extents in FURNITURE]
+    y_up_to_z_up = Rotation.from_euler("x", 90, degrees=True).as_matrix()
+    for model, spot in zip(models, MODEL_SPOTS):
+        triangles = np.asarray(model, dtype=np.float64)
+        if triangles.ndim != 3 or triangles.shape[1:] != (3, 3) or len(triangles) == 0:
+            raise InputError(f"models must be triangle soups of shape (n, 3, 3), got {triangles.shape}")
+        vertices = triangles.reshape(-1, 3) @ y_up_to_z_up.T
+        low, high = vertices.min(axis=0), vertices.max(axis=0)
+        vertices = (vertices - [(low[0] + high[0]) / 2, (low[1] + high[1]) / 2, low[2]]) * (
+            model_height / (high[2] - low[2])) + spot
+        parts.append(vertices.reshape(-1, 3, 3))
+    return np.concatenate(parts)
+
+
+def _sinusoids(times, amplitudes, frequencies, phases):
+    """``Σ_j a_jd sin(2π f_jd t + φ_jd)`` for each time and axis.
+
+    Parameters
+    ----------
+    times : ndarray of shape (n_times,)
+    amplitudes, frequencies, phases : ndarray of shape (n_terms, n_axes)
+
+    Returns
+    -------
+    values : ndarray of shape (n_times, n_axes)
+    """
+    angles = 2 * np.pi * times[:, None, None] * frequencies[None] + phases[None]
+    return np.einsum("jd,tjd->td", amplitudes, np.sin(angles))
+
+
+def handheld_trajectory(n_samples, seed=0, rate=GROUNDTRUTH_RATE, start=TUM_EPOCH):
+    """A smooth hand-held-like camera path sampled at ``rate``, looking at the table side of the room.
+
+    Parameters
+    ----------
+    n_samples : int
+    seed : int or numpy.random.SeedSequence
+    rate : float
+        Samples per second.
+    start : float
+        First timestamp (s).
+
+    Returns
+    -------
+    Trajectory
+        Camera (optical frame: x right, y down, z forward) to world poses, ``n_samples`` rows.
+    """
+    rng = np.random.default_rng(seed)
+    times = np.arange(n_samples) / rate
+
+    def phases(shape):
+        return rng.uniform(0, 2 * np.pi, size=shape)
+
+    # Slow sweep: periods 16, 11 and 7 s, amplitudes 0.9, 0.35, 0.15 m (peak speed ≈ 0.35 m/s).
+    position = np.array([0.0, -1.1, 1.5]) + _sinusoids(
+        times, np.array([[0.9, 0.35, 0.15]]), 1 / np.array([[16.0, 11.0, 7.0]]), phases((1, 3)))
+    target = np.array([0.0, 1.2, 0.7]) + _sinusoids(
+        times, np.array([[0.7, 0.3, 0.2]]), 1 / np.array([[13.0, 17.0, 9.0]]), phases((1, 3)))
+    # Hand jitter: four sinusoids per axis at 1–4 Hz, 2 mm and 0.3° each.
+    position += _sinusoids(times, np.full((4, 3), 0.002), rng.uniform(1, 4, size=(4, 3)), phases((4, 3)))
+    wobble = _sinusoids(times, np.full((4, 3), np.radians(0.3)), rng.uniform(1, 4, size=(4, 3)), phases((4, 3)))
+    wobble[:, 2] += np.radians(4.0) * np.sin(2 * np.pi * times / 10.0 + phases(()))  # slow roll about the view axis
+    forward = target - position
+    forward /= np.linalg.norm(forward, axis=1, keepdims=True)
+    right = np.cross(forward, [0.0, 0.0, 1.0])
+    right /= np.linalg.norm(right, axis=1, keepdims=True)
+    look_at = np.stack([right, np.cross(forward, right), forward], axis=2)  # columns: x right, y down, z forward
+    rotations = look_at @ Rotation.from_rotvec(wobble).as_matrix()
+    return Trajectory(start + times, rotations, position)
+
+
+def _triangle_groups(triangles, group_size=32, cell=0.1):
+    """Indices of spatially coherent groups of at most ``group_size`` triangles.
+
+    Triangles longer than ``cell`` (walls, furniture faces) come first, together; the rest are ordered by the
+    ``cell``-sized grid cell of their centroid, so that each group has a small bounding box.
+
+    Returns
+    -------
+    groups : list of ndarray of shape (<= group_size,)
+    """
+    extent = np.ptp(triangles, axis=1).max(axis=1)
+    cells = np.floor(triangles.mean(axis=1) / cell)
+    order = np.lexsort(np.column_stack([extent <= cell, cells]).T[::-1])
+    return [order[start:start + group_size] for start in range(0, len(order), group_size)]
+
+
+def _slab_hits(rays, origin, low, high):
+    """Whether each ray from ``origin`` meets the box ``[low, high]`` (slab test), shape (n_rays,)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        near, far = (low - origin) / rays, (high - origin) / rays
+    entry = np.fmax(np.fmin(near, far).max(axis=1), 0.0)
+    return np.fmin(np.fmax(near, far).min(axis=1), np.inf) >= entry
+
+
+def _nearest_hits(rays, origin, triangles):
+    """Möller–Trumbore for rays sharing one origin: parameter and ``|det|`` of each ray's nearest hit.
+
+    With ``e1, e2`` the edges from ``v0`` and ``s = o − v0``: ``det = d·(e2×e1)``, ``u det = d·(e2×s)``,
+    ``v det = d·(s×e1)`` and ``t det = e2·(s×e1)``, so three matrix products serve all rays and triangles.
+
+    Parameters
+    ----------
+    rays : ndarray of shape (n_rays, 3)
+    origin : ndarray of shape (3,)
+    triangles : ndarray of shape (n_triangles, 3, 3)
+
+    Returns
+    -------
+    t : ndarray of shape (n_rays,)
+        ``origin + t ray`` is the nearest hit; ``inf`` where none.
+    cosine : ndarray of shape (n_rays,)
+        ``|cos|`` of the angle between the ray and the hit triangle's normal (0 where no hit).
+    """
+    v0 = triangles[:, 0]
+    e1, e2 = triangles[:, 1] - v0, triangles[:, 2] - v0
+    s = origin - v0
+    q = np.cross(s, e1)
+    normal = np.cross(e2, e1)
+    det, u_det, v_det = (rays @ vectors.T for vectors in (normal, np.cross(e2, s), q))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        inverse = 1.0 / det
+        u, v, t = u_det * inverse, v_det * inverse, np.einsum("td,td->t", e2, q) * inverse
+    hit = (np.abs(det) > 1e-12) & (u >= 0) & (v >= 0) & (u + v <= 1) & (t > 1e-9)
+    t = np.where(hit, t, np.inf)
+    nearest = t.argmin(axis=1)
+    rows = np.arange(len(rays))
+    t = t[rows, nearest]
+    cosine = np.abs(det[rows, nearest]) / (np.linalg.norm(normal[nearest], axis=1) * np.linalg.norm(rays, axis=1))
+    return t, np.where(np.isfinite(t), cosine, 0.0)
+
+
+def render_depth(triangles, rotation, translation, intrinsics=FR3, step=PIXEL_STEP):
+    """Ray-cast depth ``Z`` and incidence cosine of every ``step``-th pixel (exact nearest hit).
+
+    Triangles are tested in spatially coherent groups of 64, each only against the rays that meet its bounding
+    box (a one-level bounding-volume hierarchy); ``_nearest_hits`` does the ray–triangle tests.
+
+    Parameters
+    ----------
+    triangles : ndarray of shape (n_triangles, 3, 3)
+        World coordinates.
+    rotation : ndarray of shape (3, 3)
+    translation : ndarray of shape (3,)
+        Camera-to-world pose.
+    intrinsics : Intrinsics
+    step : int
+
+    Returns
+    -------
+    depth : ndarray of shape (n_rays,)
+        Camera-frame ``Z`` of the nearest hit (camera rays have unit ``z``, so ``Z`` is the ray parameter),
+        ``inf`` where none; raster order of ``intrinsics.rays(step)``.
+    cosine : ndarray of shape (n_rays,)
+        ``|cos|`` of the angle between the ray and the hit surface's normal (0 where no hit).
+    """
+    rays = intrinsics.rays(step) @ np.asarray(rotation).T
+    origin = np.asarray(translation, dtype=np.float64)
+    depth, cosine = np.full(len(rays), np.inf), np.zeros(len(rays))
+    for group in _triangle_groups(triangles):  # a few dozen groups, each vectorised over rays × triangles
+        members = triangles[group]
+        candidates = np.flatnonzero(_slab_hits(rays, origin, members.min(axis=(0, 1)), members.max(axis=(0, 1))))
+        t, group_cosine = _nearest_hits(rays[candidates], origin, members)
+        nearer = t < depth[candidates]
+        depth[candidates[nearer]] = t[nearer]
+        cosine[candidates[nearer]] = group_cosine[nearer]
+    return depth, cosine
+
+
+def kinect_depth(depth, cosine, rng):
+    """Kinect-like measurement of exact depths: axial noise growing with Z², missing returns as 0.
+
+    Parameters
+    ----------
+    depth : ndarray of shape (n_rays,)
+        Exact ``Z`` (m), ``inf`` where nothing was hit.
+    cosine : ndarray of shape (n_rays,)
+        Incidence cosines.
+    rng : numpy.random.Generator
+
+    Returns
+    -------
+    measured : ndarray of shape (n_rays,)
+        Metres, 0 where there is no return.
+    """
+    finite = np.where(np.isfinite(depth), depth, 0.0)
+    sigma = 0.0012 + 0.0019 * (finite - 0.4) ** 2  # Nguyen et al. 2012, axial noise for incidence below 60-70°
+    measured = finite + sigma * rng.standard_normal(len(depth))
+    valid = (np.isfinite(depth) & (depth >= MIN_RANGE) & (depth <= MAX_RANGE)
+             & (cosine >= np.cos(np.radians(MAX_INCIDENCE_DEG))) & (rng.uniform(size=len(depth)) >= DROPOUT))
+    return np.where(valid, measured, 0.0)
+
+
+def write_synthetic_sequence(folder, triangles, n_frames=300, seed=0, intrinsics=FR3, step=PIXEL_STEP):
+    """Render a TUM-format sequence of ``triangles`` into ``folder`` (which must not exist yet).
+
+    Files are written to a temporary folder beside ``folder`` and renamed at the end, so a failure leaves no
+    partial sequence.
+
+    Parameters
+    ----------
+    folder : path-like
+    triangles : ndarray of shape (n_triangles, 3, 3)
+        The scene, e.g. ``room_scene([bunny_triangles])``.
+    n_frames : int
+        Depth frames at 30 Hz.
+    seed : int
+    intrinsics : Intrinsics
+    step : int
+        Render every ``step``-th pixel and fill ``step × step`` blocks (see the module docstring).
+
+    Returns
+    -------
+    TumSequence
+        The written sequence, read back.
+    """
+    folder = Path(folder)
+    if folder.exists():
+        raise InputError(f"{folder}: already exists; the synthetic sequence is written to a new folder")
+    if int(n_frames) < 1:
+        raise InputError(f"n_frames must be >= 1, got {n_frames}")
+    triangles = np.asarray(triangles, dtype=np.float64)
+    path_seed, *frame_seeds = np.random.SeedSequence(seed).spawn(1 + int(n_frames))
+    samples = np.rint(np.arange(int(n_frames)) * GROUNDTRUTH_RATE / FRAME_RATE).astype(int)
+    groundtruth = handheld_trajectory(samples[-1] + 1, seed=path_seed)
+    rows, cols = -(-intrinsics.height // step), -(-intrinsics.width // step)
+    folder.parent.mkdir(parents=True, exist_ok=True)
+    staging = Path(tempfile.mkdtemp(prefix=f".{folder.name}.", dir=folder.parent))
+    try:
+        listing = []
+        for sample, frame_seed in zip(samples, frame_seeds):  # one rendered image per frame
+            exact, cosine = render_depth(triangles, groundtruth.rotations[sample], groundtruth.translations[sample],
+                                         intrinsics, step)
+            measured = kinect_depth(exact, cosine, np.random.default_rng(frame_seed)).reshape(rows, cols)
+            image = np.repeat(np.repeat(measured, step, axis=0), step, axis=1)[:intrinsics.height, :intrinsics.width]
+            name = f"depth/{groundtruth.timestamps[sample]:.6f}.png"
+            write_depth(staging / name, image)
+            listing.append(f"{groundtruth.timestamps[sample]:.6f} {name}\n")
+        (staging / "depth.txt").write_text(
+            f"# depth maps\n# synthetic sequence: dgmm.synthetic, seed {seed}, {len(triangles)} triangles\n"
+            "# timestamp filename\n" + "".join(listing))
+        write_trajectory(staging / "groundtruth.txt", groundtruth,
+                         header=f"ground truth trajectory (synthetic, seed {seed})")
+        os.rename(staging, folder)
+    except BaseException:
+        shutil.rmtree(staging)
+        raise
+    return read_sequence(folder)
