@@ -99,11 +99,11 @@ def sha256sum(path):
     return digest.hexdigest()
 
 
-def _verified(path, remote):
-    """Return ``path`` if its sha256 matches ``remote``; a mismatch is an error, never a silent use."""
+def _verified(path, remote, name=None):
+    """Return ``path`` if its sha256 matches ``remote``; a mismatch is an error (naming ``name`` or the path)."""
     actual = sha256sum(path)
     if actual != remote.sha256:
-        raise DataError(f"{path}: sha256 {actual} does not match the registered {remote.sha256}")
+        raise DataError(f"{name or path}: sha256 {actual} does not match the registered {remote.sha256}")
     return path
 
 
@@ -122,7 +122,7 @@ def _download(remote, destination):
                 for block in iter(lambda: response.read(1 << 16), b""):
                     out.write(block)
                     bar.update(len(block))
-        os.replace(_verified(Path(partial), remote), destination)
+        os.replace(_verified(Path(partial), remote, f"{remote.filename} from {remote.url}"), destination)
     finally:
         Path(partial).unlink(missing_ok=True)
     return destination

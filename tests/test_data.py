@@ -147,7 +147,7 @@ def test_download_with_wrong_sha256_leaves_nothing(tmp_path, server):
     cache = tmp_path / "cache"
     with pytest.raises(DataError) as exc:
         fetch(remote, [], cache)
-    _one_line_naming(exc, RES4.filename, "sha256")
+    _one_line_naming(exc, RES4.filename, remote.url, "sha256")
     assert os.listdir(cache) == []
 
 

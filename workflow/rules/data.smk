@@ -5,6 +5,7 @@
 import os
 
 from dgmm.data import REGISTRY
+from dgmm.meshes import REDUCTIONS
 
 DATA = config["data"]
 DATA_DIR = f"{RESULTS}/data"
@@ -25,11 +26,13 @@ def data_targets():
     return targets
 
 
-wildcard_constraints:
+# Kept to this stage's rules: other stages use the same wildcard names with their own values.
+DATA_WILDCARDS = dict(
     model="|".join(REGISTRY),
-    mesh="full|res4",
-    method="quadric|clustering|poisson|random",
+    mesh="|".join(sorted({mesh for meshes in REGISTRY.values() for mesh in meshes})),
+    method="|".join(REDUCTIONS),
     budget=r"\d+",
+)
 
 
 rule data:
@@ -38,6 +41,8 @@ rule data:
 
 
 rule data_mesh:
+    wildcard_constraints:
+        **DATA_WILDCARDS,
     output:
         mesh=f"{DATA_DIR}/{{model}}/{{mesh}}.ply",
     params:
@@ -52,6 +57,8 @@ rule data_mesh:
 
 
 rule data_eval:
+    wildcard_constraints:
+        **DATA_WILDCARDS,
     input:
         mesh=f"{DATA_DIR}/{{model}}/{{mesh}}.ply",
     output:
@@ -67,6 +74,8 @@ rule data_eval:
 
 
 rule data_reduce:
+    wildcard_constraints:
+        **DATA_WILDCARDS,
     input:
         mesh=f"{DATA_DIR}/{{model}}/full.ply",
     output:
