@@ -178,6 +178,7 @@ def _fit(args):
 
 
 def _fit_arguments(parser):
+    """Arguments of ``dgmm fit``."""
     parser.add_argument("input", type=Path, metavar="INPUT", help="mesh or point cloud file")
     parser.add_argument("-k", "--components", dest="k", type=_positive_int, required=True, metavar="K",
                         help="number of mixture components")
@@ -205,6 +206,7 @@ def _score(args):
 
 
 def _score_arguments(parser):
+    """Arguments of ``dgmm score``."""
     parser.add_argument("model", type=Path, metavar="MODEL", help="model file written by dgmm fit")
     parser.add_argument("input", type=Path, metavar="INPUT", help="mesh or point cloud file")
     _kind_argument(parser)
@@ -226,6 +228,7 @@ def _register(args):
         raise InputError("--target and --samples are for icp and cpd; p2d registers to the model itself")
 
     def target():
+        """Target points of icp and cpd: ``--target``'s points, or samples of the model."""
         if args.target is not None:
             return read_input(args.target, "points")[1]
         model.random_state = args.seed
@@ -246,6 +249,7 @@ def _register(args):
 
 
 def _register_arguments(parser):
+    """Arguments of ``dgmm register``."""
     parser.add_argument("model", type=Path, metavar="MODEL", help="model file written by dgmm fit")
     parser.add_argument("points", type=Path, metavar="POINTS", help="points to move (the vertices of a mesh file)")
     parser.add_argument("--method", choices=tuple(_METHODS), default="p2d",
@@ -271,6 +275,7 @@ def _sample(args):
 
 
 def _sample_arguments(parser):
+    """Arguments of ``dgmm sample``."""
     parser.add_argument("model", type=Path, metavar="MODEL", help="model file written by dgmm fit")
     parser.add_argument("-n", type=_positive_int, required=True, metavar="N", help="number of points")
     parser.add_argument("-o", "--output", type=Path, required=True, metavar="OUT.ply", help="PLY file to write")
@@ -313,6 +318,7 @@ def _view(args):
 
 
 def _view_arguments(parser):
+    """Arguments of ``dgmm view``."""
     parser.add_argument("file", type=Path, metavar="FILE.rrd", help="rerun recording written by dgmm fit --rrd")
 
 

@@ -105,10 +105,12 @@ def _check_arrays(path, arrays):
     if missing:
         raise DataError(f"{path}: model file lacks {', '.join(missing)}")
     weights, means, covariances = (arrays[name] for name in ("weights", "means", "covariances"))
-    n_components = len(weights) if weights.ndim == 1 else 0
+    if weights.ndim != 1 or len(weights) == 0:
+        raise DataError(f"{path}: weights must be a non-empty 1-D array, got shape {weights.shape}")
+    n_components = len(weights)
     expected = {"weights": (n_components,), "means": (n_components, 3), "covariances": (n_components, 3, 3)}
     for name, shape in expected.items():
-        if n_components == 0 or arrays[name].shape != shape or not np.issubdtype(arrays[name].dtype, np.floating):
+        if arrays[name].shape != shape or not np.issubdtype(arrays[name].dtype, np.floating):
             raise DataError(f"{path}: {name} must be a float array of shape {shape}, got "
                             f"{arrays[name].dtype} {arrays[name].shape}")
         if not np.all(np.isfinite(arrays[name])):

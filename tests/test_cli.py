@@ -4,6 +4,7 @@ References are independent of the CLI: the library fitted in this process with t
 log-densities from scipy, poses built here with scipy's Rotation, closed-form mixture moments, and the rerun CLI
 and mcap's reader for the recordings.
 """
+import io
 import json
 import shlex
 import subprocess
@@ -253,7 +254,7 @@ def test_progress_bar_only_on_a_terminal(monkeypatch):
 
     monkeypatch.setattr(sys, "stderr", Terminal())
     assert not cli._progress_bar(5).disable
-    monkeypatch.setattr(sys, "stderr", open(__file__))
+    monkeypatch.setattr(sys, "stderr", io.StringIO())  # a pipe or file: isatty() is False
     assert cli._progress_bar(5).disable
 
 
