@@ -377,8 +377,15 @@ class GaussianMixture(BaseEstimator):
         """Mean log-likelihood of the points."""
         return float(self.score_samples(X).mean())
 
+    def primitive_bounds(self, X):
+        """Per-primitive bound ``logsumexp_i(log lambda_i + E_p[log N_i])``, shape (n_prims,).
+
+        For a point it is its log-likelihood; for a triangle, a lower bound of its mean log-likelihood.
+        """
+        return self._log_norm(as_primitives(X))
+
     def score_primitives(self, X):
-        """Size-weighted mean over primitives of the bound ``logsumexp_i(log lambda_i + E_p[log N_i])``.
+        """Size-weighted mean of :meth:`primitive_bounds`.
 
         For points it is the mean log-likelihood; for a mesh it is the triangle bound of eq. 11, a lower bound
         of the surface-averaged log-likelihood.
@@ -390,6 +397,14 @@ class GaussianMixture(BaseEstimator):
         """Index of the most responsible component for each point or primitive."""
         prims = as_primitives(X)
         return np.concatenate([block.argmax(axis=1) for block in self._log_rho_blocks(prims)])
+
+    def predict_proba(self, X):
+        """Responsibilities ``eta`` of each component for each point or primitive, shape (n, n_components)."""
+        prims = as_primitives(X)
+        blocks = list(self._log_rho_blocks(prims))
+        for block in blocks:
+            _normalise_in_place(block)
+        return np.concatenate(blocks)
 
     def sample(self, n_samples=1):
         """Draw ``n_samples`` points; returns (X of shape (n_samples, 3), component labels)."""

@@ -8,5 +8,5 @@ RESULTS = config.get("results", "results")
 
 
 def get_final_output():
-    """Every target of `rule all`: the outputs of each stage the config enables."""
-    return rules.data.input
+    """Every target of `rule all`: the outputs of each stage."""
+    return [*rules.data.input, *rules.fits.input]

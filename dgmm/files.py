@@ -1,0 +1,29 @@
+"""Atomic file output: a job that fails leaves no partial file behind."""
+import os
+from contextlib import contextmanager
+from pathlib import Path
+
+
+def temporary_path(path):
+    """Hidden name beside ``path``, unique to this process, to write to before renaming into place."""
+    path = Path(path)
+    return path.with_name(f".{path.name}.{os.getpid()}.part")
+
+
+@contextmanager
+def atomic_path(path):
+    """Yield a temporary path beside ``path``; rename it to ``path`` when the block succeeds, delete it if not.
+
+    Examples
+    --------
+    >>> with atomic_path("table.csv") as partial:  # doctest: +SKIP
+    ...     partial.write_text("a,b\\n")
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    partial = temporary_path(path)
+    try:
+        yield partial
+        os.replace(partial, path)
+    finally:
+        partial.unlink(missing_ok=True)

@@ -1,0 +1,111 @@
+"""The fitting sweep run by real Snakemake on tests/config.yaml: numbers, recordings, interruption."""
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from collections import defaultdict
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from dgmm.tables import read_csv
+from tests.test_recording import read_mcap, read_rrd
+
+REPO = Path(__file__).resolve().parents[1]
+SNAKEMAKE = Path(sys.executable).with_name("snakemake")
+RERUN = Path(sys.executable).with_name("rerun")
+pytestmark = pytest.mark.slow
+
+
+def snakemake_command(workdir, *targets):
+    return [str(SNAKEMAKE), "--snakefile", str(REPO / "Snakefile"), "--directory", str(workdir),
+            "--configfile", str(REPO / "tests" / "config.yaml"), "--cores", "2", *targets]
+
+
+@pytest.fixture(scope="module")
+def sweep(tmp_path_factory):
+    """Results of one uninterrupted `snakemake fits` on the tiny config."""
+    workdir = tmp_path_factory.mktemp("fits")
+    run = subprocess.run(snakemake_command(workdir, "fits"), capture_output=True, text=True, timeout=900)
+    assert run.returncode == 0, run.stderr[-3000:]
+    return workdir / "results"
+
+
+def mean_eval(rows):
+    """Mean eval_ll over seeds per (input, K, init, variant)."""
+    groups = defaultdict(list)
+    for row in rows:
+        groups[row["input"], int(row["K"]), row["init"], row["variant"]].append(float(row["eval_ll"]))
+    return {key: np.mean(values) for key, values in groups.items()}
+
+
+def test_likelihoods_reproduce_the_paper_on_bunny_res4(sweep):
+    rows = read_csv(sweep / "tables" / "likelihood.csv")
+    assert list(rows[0]) == ["model", "input", "K", "init", "variant", "seed", "eval_ll", "bound", "n_iter"]
+    ll = mean_eval(rows)
+    # Paper Fig 3: exact triangles, K=100, k-means: about 8.2 nats per evaluation point.
+    assert ll["res4-exact", 100, "kmeans", "textbook"] == pytest.approx(8.2, abs=0.3)
+    for k in (100, 400):
+        exact, approx, vertices = (ll[f"res4-{kind}", k, "kmeans", "textbook"]
+                                   for kind in ("exact", "approx", "vertices"))
+        assert exact >= approx >= vertices
+    # 453 vertices cannot support 400 components: the vertex fit collapses onto single points.
+    assert ll["res4-vertices", 400, "kmeans", "textbook"] < ll["res4-vertices", 100, "kmeans", "textbook"] - 1.0
+    # Points have a single EM variant; sized inputs run both.
+    assert {v for (i, *_, v) in ll if i == "res4-vertices"} == {"textbook"}
+    assert {v for (i, *_, v) in ll if i == "res4-exact"} == {"textbook", "authors"}
+
+
+def test_every_recording_reads_back_and_matches_the_table(sweep):
+    rows = read_csv(sweep / "tables" / "likelihood.csv")
+    jobs = defaultdict(dict)
+    for row in rows:
+        job = sweep / "fits" / row["model"] / row["input"] / row["variant"] / f"k{row['K']}-{row['init']}"
+        jobs[job][int(row["seed"])] = row
+    assert len(jobs) == 12  # (exact, approx) x 2 variants x 2 K + vertices x 2 K + random exact x 2 variants
+    for job, seeds in jobs.items():
+        messages = read_mcap(job / "fit.mcap")
+        iterations = [m for topic, _, m, _ in messages if topic == "/fit/iteration"]
+        for seed, row in seeds.items():
+            bounds = [m["bound"] for m in iterations if m["seed"] == seed]
+            assert len(bounds) == int(row["n_iter"])
+            assert bounds[-1] == float(row["bound"])
+        verify = subprocess.run([str(RERUN), "rrd", "verify", str(job / "fit.rrd")], capture_output=True, text=True)
+        assert verify.returncode == 0, verify.stderr
+        mixture = read_rrd(job / "fit.rrd", "/mixture")
+        n_iter = int(seeds[0]["n_iter"])
+        assert mixture["iteration"] == list(range(1, n_iter + 1))
+        assert all(len(centers) == int(seeds[0]["K"]) for centers in mixture["Ellipsoids3D:centers"])
+
+
+def test_fig2_table_has_every_expression(sweep):
+    rows = read_csv(sweep / "tables" / "fig2.csv")
+    measures = {row["measure"] for row in rows}
+    assert measures == {"triangle", "centroid", "area x centroid", "points", "all points"}
+    for row in rows:
+        # Dropping the responsibilities' entropy can only lower the bound.
+        assert float(row["expected"]) <= float(row["bound"]) + 1e-12
+
+
+def test_interrupted_sweep_resumes_without_redoing_jobs(sweep, tmp_path):
+    """Kill the sweep mid-run, run it again: completed jobs stay as they were and the table is byte-identical."""
+    shutil.copytree(sweep / "data", tmp_path / "results" / "data")  # the data stage is not under test here
+    process = subprocess.Popen(snakemake_command(tmp_path, "fits"), stdout=subprocess.DEVNULL,
+                               stderr=subprocess.DEVNULL, start_new_session=True)
+    fits = tmp_path / "results" / "fits"
+    deadline = time.monotonic() + 300
+    while len(list(fits.rglob("scores.csv"))) < 3 and time.monotonic() < deadline and process.poll() is None:
+        time.sleep(0.2)
+    process.send_signal(signal.SIGTERM)  # what `kill` sends
+    process.wait()
+    done = {path: path.stat().st_mtime_ns for path in fits.rglob("scores.csv")}
+    assert 3 <= len(done) < 12, "the sweep should have been interrupted part-way"
+    assert not list(tmp_path.rglob("*.part")), "an interrupted job left a partial file"
+
+    rerun = subprocess.run(snakemake_command(tmp_path, "fits"), capture_output=True, text=True, timeout=900)
+    assert rerun.returncode == 0, rerun.stderr[-3000:]
+    assert all(path.stat().st_mtime_ns == mtime for path, mtime in done.items())
+    table = "tables/likelihood.csv"
+    assert (tmp_path / "results" / table).read_bytes() == (sweep / table).read_bytes()

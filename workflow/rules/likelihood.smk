@@ -1,0 +1,45 @@
+# Likelihood tables (Figs 2, 3, 4, Table 1) under results/tables/:
+#   likelihood.csv    every fit's seeds: model, input, K, init, variant, seed, eval_ll, bound, n_iter
+#   fit_seconds.csv   the same keys with each fit's wall time
+#   fig2.csv          Fig 2: likelihood expressions of one K=50 fit to dense samples of bunny res4
+FIG2 = config["fig2"]
+
+
+rule likelihood_table:
+    input:
+        scores=fit_outputs("scores.csv"),
+        seconds=fit_outputs("seconds.csv"),
+    output:
+        likelihood=f"{RESULTS}/tables/likelihood.csv",
+        seconds=f"{RESULTS}/tables/fit_seconds.csv",
+    log:
+        f"{RESULTS}/logs/tables/likelihood.log",
+    threads: 1
+    script:
+        "../scripts/likelihood_table.py"
+
+
+rule fig2:
+    input:
+        mesh=f"{DATA_DIR}/{FIG2['model']}/{FIG2['mesh']}.ply",
+    output:
+        table=f"{RESULTS}/tables/fig2.csv",
+        mcap=f"{RESULTS}/fig2/fit.mcap",
+        rrd=f"{RESULTS}/fig2/fit.rrd",
+    params:
+        seed=config["seed"],
+        fig2=FIG2,
+        max_iter=FIT["max_iter"],
+        tol=FIT["tol"],
+        reg_covar=FIT["reg_covar"],
+    log:
+        f"{RESULTS}/logs/fig2.log",
+    threads: 1
+    script:
+        "../scripts/fig2.py"
+
+
+rule fits:
+    input:
+        rules.likelihood_table.output,
+        rules.fig2.output.table,
