@@ -261,8 +261,9 @@ def test_progress_bar_only_on_a_terminal(monkeypatch):
 # ------------------------------------------------------------------------------------------------ quick start
 
 def quickstart_commands():
-    """The ``dgmm`` lines of the shell blocks of docs/quickstart.md, but ``dgmm view`` (it needs a screen)."""
-    text = (REPO / "docs" / "quickstart.md").read_text()
+    """The lines of the shell blocks of the README's quick start, but ``dgmm view`` (it needs a screen)."""
+    readme = (REPO / "README.md").read_text()
+    text = readme.split("## Quick start")[1].split("\n## ")[0]
     blocks = text.split("```sh\n")[1:]
     lines = [line for block in blocks for line in block.split("```")[0].splitlines() if line.strip()]
     return [line for line in lines if not line.startswith("dgmm view")]
