@@ -272,6 +272,27 @@ class GaussianMixture(BaseEstimator):
         self.variant = variant
         self.callback = callback
 
+    @classmethod
+    def from_parameters(cls, weights, means, covariances, **params):
+        """A fitted mixture holding the given parameters, ready to score, predict and sample.
+
+        Parameters
+        ----------
+        weights : array-like of shape (n_components,)
+        means : array-like of shape (n_components, 3)
+        covariances : array-like of shape (n_components, 3, 3)
+            Symmetric positive definite, else FitError.
+        **params
+            Other estimator parameters (``random_state``, ...).
+        """
+        k = len(weights)
+        model = cls(n_components=k, **params)
+        model.weights_ = _check_array("weights", weights, (k,))
+        model.means_ = _check_array("means", means, (k, 3))
+        model.covariances_ = _check_array("covariances", covariances, (k, 3, 3))
+        model.precisions_cholesky_ = _precisions_cholesky(model.covariances_)
+        return model
+
     def _check_parameters(self, prims):
         for name, (check, expected) in _PARAMETERS.items():
             value = getattr(self, name)

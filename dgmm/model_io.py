@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from dgmm.errors import DataError, FitError, InputError
-from dgmm.mixture import GaussianMixture, _precisions_cholesky
+from dgmm.mixture import GaussianMixture
 
 FORMAT_VERSION = 1
 """Version written by :func:`save_model`; :func:`load_model` reads only this version."""
@@ -160,10 +160,6 @@ def load_model(path):
     weights, means, covariances = _check_arrays(path, arrays)
     params = _read_params(path, arrays["params"])
     try:
-        precisions_cholesky = _precisions_cholesky(covariances)
+        return GaussianMixture.from_parameters(weights, means, covariances), params
     except FitError:
         raise DataError(f"{path}: covariances are not positive definite") from None
-    model = GaussianMixture(n_components=len(weights))
-    model.weights_, model.means_, model.covariances_ = weights, means, covariances
-    model.precisions_cholesky_ = precisions_cholesky
-    return model, params

@@ -15,22 +15,12 @@ from dgmm import FitError, GaussianMixture, InputError, Primitives
 from tests.test_primitives import uniform_in_triangle
 
 
-def fixed_mixture(weights, means, covariances):
-    """A GaussianMixture holding the given parameters (set as the fitted attributes; fitting would move them)."""
-    gmm = GaussianMixture(len(weights))
-    gmm.weights_ = np.asarray(weights, float)
-    gmm.means_ = np.asarray(means, float)
-    gmm.covariances_ = np.asarray(covariances, float)
-    gmm.precisions_cholesky_ = np.linalg.cholesky(np.linalg.inv(gmm.covariances_))
-    return gmm
-
-
 def test_expected_log_density_over_a_triangle_equals_monte_carlo():
     rng = np.random.default_rng(3)
     triangle = np.array([[0.1, 0.2, 0.0], [0.9, -0.3, 0.4], [0.2, 0.8, -0.5]])
     mean = np.array([0.3, 0.1, 0.2])
     covariance = np.array([[0.5, 0.1, 0.0], [0.1, 0.3, -0.05], [0.0, -0.05, 0.2]])
-    gmm = fixed_mixture([1.0], [mean], [covariance])
+    gmm = GaussianMixture.from_parameters([1.0], [mean], [covariance])
     closed_form = gmm.score_primitives(Primitives.from_mesh(triangle, [[0, 1, 2]]))
 
     log_density = multivariate_normal(mean, covariance).logpdf(uniform_in_triangle(triangle, 1_000_000, rng))
