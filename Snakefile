@@ -12,6 +12,7 @@ include: "workflow/rules/common.smk"
 include: "workflow/rules/data.smk"
 include: "workflow/rules/fit.smk"
 include: "workflow/rules/likelihood.smk"
+include: "workflow/rules/register.smk"
 
 
 rule all:

@@ -1,0 +1,9 @@
+"""Job: concatenate every input list of CSV files into the output of the same name (e.g. errors, seconds)."""
+import sys
+
+from dgmm.tables import concat_csv
+
+smk = snakemake  # noqa: F821 (injected by Snakemake)
+sys.stderr = open(smk.log[0], "w")
+for name, path in smk.output.items():
+    concat_csv(smk.input[name], path)

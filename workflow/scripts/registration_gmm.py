@@ -1,0 +1,29 @@
+"""Job: fit the Gaussian mixture of one P2D registration method on one model's mesh, with its recordings."""
+import sys
+
+import trimesh
+from threadpoolctl import threadpool_limits
+
+from dgmm.data import load_mesh
+from dgmm.model_io import save_model
+from dgmm.recording import FitRecorder
+from dgmm.sweep import job_seed
+from dgmm.trials import fit_mixture
+
+smk = snakemake  # noqa: F821 (injected by Snakemake)
+sys.stderr = open(smk.log[0], "w")
+w, p = smk.wildcards, smk.params
+key = f"registration/{w.model}/{w.mesh}/{w.method}"
+vertices, faces = load_mesh(smk.input.mesh)
+settings = dict(p.mixture)
+seed = job_seed(p.seed, key, 0)
+params = dict(model=w.model, mesh=w.mesh, method=w.method, **settings, seed=seed, root_seed=p.seed)
+n_components = settings.pop("components")
+shown = trimesh.Trimesh(vertices, faces, process=False)
+
+with threadpool_limits(smk.threads), FitRecorder(smk.output.mcap, smk.output.rrd, params=params, data=shown) as rec:
+    rec.begin_seed(0)
+    model = fit_mixture(w.method, vertices, faces, n_components=n_components, seed=seed, callback=rec, **settings)
+    rec.end_seed(model)
+save_model(smk.output.gmm, model, {**params, "n_iter": model.n_iter_, "bound": model.lower_bound_})
+print(f"{key}: {model.n_iter_} iterations, bound {model.lower_bound_:.4f}", file=sys.stderr)
