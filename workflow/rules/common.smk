@@ -1,4 +1,6 @@
 # Config validation and helpers shared by every rule file.
+# Every rule declares resources: (mem_mb, runtime in minutes, cpus_per_task) for cluster schedulers: measured peaks
+# (benchmarks/job_resources.py, README "Running on a Slurm cluster") with about 2x memory and 15x time headroom.
 from snakemake.utils import validate
 
 

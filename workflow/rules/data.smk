@@ -52,6 +52,10 @@ rule data_mesh:
     log:
         f"{RESULTS}/logs/data/{{model}}/{{mesh}}.log",
     threads: 1
+    resources:
+        mem_mb=500,
+        runtime=5,
+        cpus_per_task=1,
     script:
         "../scripts/data_mesh.py"
 
@@ -69,6 +73,10 @@ rule data_eval:
     log:
         f"{RESULTS}/logs/data/{{model}}/{{mesh}}_eval.log",
     threads: 1
+    resources:
+        mem_mb=1000,
+        runtime=5,
+        cpus_per_task=1,
     script:
         "../scripts/data_reduce.py"
 
@@ -86,5 +94,9 @@ rule data_reduce:
     log:
         f"{RESULTS}/logs/data/{{model}}/{{method}}{{budget}}.log",
     threads: 1
+    resources:
+        mem_mb=1000,
+        runtime=5,
+        cpus_per_task=1,
     script:
         "../scripts/data_reduce.py"

@@ -60,5 +60,9 @@ rule fit:
     log:
         f"{RESULTS}/logs/fits/{{model}}/{{input}}/{{variant}}/k{{k}}-{{init}}.log",
     threads: 1
+    resources:
+        mem_mb=1000,
+        runtime=5,
+        cpus_per_task=1,
     script:
         "../scripts/fit.py"

@@ -15,6 +15,10 @@ rule likelihood_table:
     log:
         f"{RESULTS}/logs/tables/likelihood.log",
     threads: 1
+    resources:
+        mem_mb=500,
+        runtime=5,
+        cpus_per_task=1,
     script:
         "../scripts/likelihood_table.py"
 
@@ -35,6 +39,10 @@ rule fig2:
     log:
         f"{RESULTS}/logs/fig2.log",
     threads: 1
+    resources:
+        mem_mb=1000,
+        runtime=5,
+        cpus_per_task=1,
     script:
         "../scripts/fig2.py"
 
