@@ -8,11 +8,15 @@ min_version("8.0")
 configfile: "config.yaml"
 
 
+report: "workflow/report/workflow.rst"
+
+
 include: "workflow/rules/common.smk"
 include: "workflow/rules/data.smk"
 include: "workflow/rules/fit.smk"
 include: "workflow/rules/likelihood.smk"
 include: "workflow/rules/register.smk"
+include: "workflow/rules/report.smk"
 
 
 rule all:

@@ -1,0 +1,146 @@
+"""The report's tables, computed from the sweep's tidy CSVs (rows are dicts of strings, as ``dgmm.tables`` reads).
+
+- ``likelihood.csv``: model, input, K, init, variant, seed, eval_ll, bound, n_iter (one row per fitted seed);
+- ``fig2.csv``: measure, n, draw, bound, expected (Fig 2's likelihood expressions of one fit);
+- ``registration.csv``: model, mesh, method, trial, rotation_error_deg, translation_error_pct, iterations, ...
+
+Registration methods are named ``{mesh|points}-{kmeans|random}`` (P2D with a GMM fitted to the mesh or to its
+vertices), ``icp`` and ``cpd``.
+"""
+import math
+from collections import defaultdict
+
+import numpy as np
+
+from dgmm.report import paper
+
+FIG2_EXPRESSIONS = ("triangle", "centroid", "area x centroid")
+TABLE1_MESH = "quadric1000"  # the registered mesh of Table 1 (the data stage's quadric decimation)
+FIG5_MESH = ("bunny", "res4")  # (model, mesh) of Fig 5
+TABLE1_INPUTS = {"points": "quadric1000-vertices", "mesh": "quadric1000-exact"}
+TABLE1_FIT = {"K": 100, "init": "kmeans", "variant": "textbook"}
+TABLE1_METHODS = {"points": "points-kmeans", "mesh": "mesh-kmeans", "reference": "icp"}
+ERRORS = {"rot": "rotation_error_deg", "trans": "translation_error_pct"}
+
+
+def likelihood_means(rows):
+    """Mean and standard deviation over seeds of the evaluation log-likelihood of every fit job.
+
+    Parameters
+    ----------
+    rows : list of dict
+        Rows of ``likelihood.csv``.
+
+    Returns
+    -------
+    dict
+        ``(model, input, variant, init, K) -> (mean, std)``, std the population standard deviation over seeds.
+    """
+    groups = defaultdict(list)
+    for row in rows:
+        key = (row["model"], row["input"], row["variant"], row["init"], int(row["K"]))
+        groups[key].append(float(row["eval_ll"]))
+    return {key: (float(np.mean(values)), float(np.std(values))) for key, values in sorted(groups.items())}
+
+
+def likelihood_curves(means, model, inputs):
+    """Fig 3/4 curves: for each (input, variant, init) of ``model`` among ``inputs``, the K values in order.
+
+    Returns
+    -------
+    dict
+        ``(input, variant, init) -> (ks, mean, std)``, three ndarrays of shape (n_k,), inputs in the order given.
+    """
+    curves = defaultdict(list)
+    for (row_model, input_name, variant, init, k), stats in means.items():
+        if row_model == model and input_name in inputs:
+            curves[input_name, variant, init].append((k, *stats))
+    order = sorted(curves, key=lambda key: (inputs.index(key[0]), key[1], key[2]))
+    return {key: tuple(np.array(column) for column in zip(*sorted(curves[key]))) for key in order}
+
+
+def fig2_bars(rows, column):
+    """Fig 2's bars for one column (``"expected"``, the paper's quantity, or ``"bound"``, ours).
+
+    Returns
+    -------
+    bars : list of (label, mean, std)
+        The three expressions (std 0), then sampled points per n (mean and std over draws), in file order.
+    reference : float
+        The value of all the points the mixture was fitted to (the paper's horizontal line).
+    """
+    draws = defaultdict(list)
+    reference = math.nan
+    for row in rows:
+        if row["measure"] == "all points":
+            reference = float(row[column])
+        else:
+            label = row["measure"] if row["measure"] in FIG2_EXPRESSIONS else f"{int(row['n']):,} points"
+            draws[label].append(float(row[column]))
+    bars = [(label, float(np.mean(values)), float(np.std(values))) for label, values in draws.items()]
+    return bars, reference
+
+
+def registration_errors(rows):
+    """Errors of every registration trial.
+
+    Returns
+    -------
+    dict
+        ``(model, mesh, method) -> {"rot": ndarray of shape (n_trials,), "trans": ndarray of shape (n_trials,)}``.
+    """
+    groups = defaultdict(lambda: {name: [] for name in ERRORS})
+    for row in rows:
+        for name, column in ERRORS.items():
+            groups[row["model"], row["mesh"], row["method"]][name].append(float(row[column]))
+    return {key: {name: np.array(values) for name, values in errors.items()} for key, errors in groups.items()}
+
+
+def _percent_of_reference(errors, model, method, name):
+    """Mean error of ``method`` on Table 1's mesh as % of the reference method's (ICP); nan when either is missing."""
+    measured = errors.get((model, TABLE1_MESH, method))
+    reference = errors.get((model, TABLE1_MESH, TABLE1_METHODS["reference"]))
+    if measured is None or reference is None:
+        return math.nan
+    return 100.0 * float(np.mean(measured[name])) / float(np.mean(reference[name]))
+
+
+def table1(means, errors=None):
+    """Table 1 for the paper's five models: ours beside the paper's, nan where we have no measurement.
+
+    Parameters
+    ----------
+    means : dict
+        From :func:`likelihood_means`.
+    errors : dict, optional
+        From :func:`registration_errors`; None while the registration stage is pending.
+
+    Returns
+    -------
+    list of dict
+        One per model: ``model`` and, for each column of ``paper.TABLE1_COLUMNS``, ours and ``{column}_paper``.
+        Likelihoods are mean eval log-likelihoods (nats); errors are % of ICP's mean error.
+    """
+    fit = TABLE1_FIT
+    rows = []
+    for model, published in paper.TABLE1.items():
+        ours = {f"ll_{kind}": means.get((model, name, fit["variant"], fit["init"], fit["K"]), (math.nan,))[0]
+                for kind, name in TABLE1_INPUTS.items()}
+        for name in ERRORS:
+            for kind in ("points", "mesh"):
+                ours[f"{name}_{kind}"] = _percent_of_reference(errors or {}, model, TABLE1_METHODS[kind], name)
+        row = {"model": model}
+        for column, value in zip(paper.TABLE1_COLUMNS, published):
+            row[column], row[f"{column}_paper"] = ours[column], value
+        rows.append(row)
+    return rows
+
+
+def table1_columns():
+    """Column order of ``table1.csv``: model, then each measure as ours and the paper's."""
+    return ["model", *(name for column in paper.TABLE1_COLUMNS for name in (column, f"{column}_paper"))]
+
+
+def format_number(value, digits=2):
+    """A table cell: fixed digits, an en dash for a missing (nan) value."""
+    return "–" if math.isnan(value) else f"{value:.{digits}f}"

@@ -1,0 +1,14 @@
+"""Job: the report (Table 1, claims, figures) from the sweep's tables into the report folder."""
+import sys
+from pathlib import Path
+
+from threadpoolctl import threadpool_limits
+
+from dgmm.report import INPUTS, build_report
+
+smk = snakemake  # noqa: F821 (injected by Snakemake)
+sys.stderr = open(smk.log[0], "w")
+paths = {key: smk.input[key] for key in INPUTS if key in smk.input.keys()}
+with threadpool_limits(smk.threads):
+    build_report(paths, smk.params.figures, Path(smk.output.html).parent, seed=smk.params.seed)
+print(f"report: {len(smk.params.figures)} figures from {sorted(paths)}", file=sys.stderr)
