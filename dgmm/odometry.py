@@ -112,12 +112,6 @@ class Trajectory:
     def __len__(self):
         return len(self.timestamps)
 
-    def relative(self, first, second):
-        """The relative pose ``T_first⁻¹ T_second`` as ``(rotation (3, 3), translation (3,))``."""
-        r_first = self.rotations[first]
-        return (r_first.T @ self.rotations[second],
-                r_first.T @ (self.translations[second] - self.translations[first]))
-
     def subset(self, indices):
         """The frames at ``indices`` (array-like of ints), in that order."""
         return Trajectory(self.timestamps[indices], self.rotations[indices], self.translations[indices])
