@@ -1,0 +1,287 @@
+"""The report: its tables and claims against hand-computed values, and the whole `report` rule on synthetic tables,
+rendered in headless Chromium."""
+import math
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+from dgmm.data import load_mesh, save_ply
+from dgmm.report import claims, figure_names
+from dgmm.report.document import markdown_table, to_html, to_markdown
+from dgmm.report.tables import fig2_bars, likelihood_means, registration_errors, table1
+from dgmm.tables import read_csv, write_csv
+from tests.conftest import SHARED_DATA
+
+REPO = Path(__file__).resolve().parents[1]
+SNAKEMAKE = Path(sys.executable).with_name("snakemake")
+CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
+MODELS = ("armadillo", "bunny", "dragon", "happy", "lucy")
+
+
+def ll_row(model, input_name, k, init, variant, seed, eval_ll):
+    return dict(model=model, input=input_name, K=k, init=init, variant=variant, seed=seed, eval_ll=eval_ll,
+                bound=eval_ll - 1.0, n_iter=25)
+
+
+def reg_rows(model, mesh, method, rot, trans):
+    return [dict(model=model, mesh=mesh, method=method, trial=i, rotation_error_deg=r, translation_error_pct=t,
+                 iterations=10, converged=True) for i, (r, t) in enumerate(zip(rot, trans))]
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Tables, by hand
+# ---------------------------------------------------------------------------------------------------------
+
+def test_likelihood_means_are_mean_and_population_std_over_seeds():
+    rows = [ll_row("bunny", "res4-exact", 25, "kmeans", "textbook", s, v) for s, v in enumerate([1.0, 3.0])]
+    rows.append(ll_row("bunny", "res4-exact", 100, "kmeans", "textbook", 0, 5.0))
+    rows = [{key: str(value) for key, value in row.items()} for row in rows]  # as read from CSV
+    assert likelihood_means(rows) == {("bunny", "res4-exact", "textbook", "kmeans", 25): (2.0, 1.0),
+                                      ("bunny", "res4-exact", "textbook", "kmeans", 100): (5.0, 0.0)}
+
+
+FIG2_ROWS = [
+    {"measure": "triangle", "n": "", "draw": "0", "bound": "7.5", "expected": "7.0"},
+    {"measure": "centroid", "n": "", "draw": "0", "bound": "7.9", "expected": "7.4"},
+    {"measure": "area x centroid", "n": "", "draw": "0", "bound": "8.0", "expected": "7.6"},
+    {"measure": "points", "n": "10", "draw": "0", "bound": "8.5", "expected": "8.0"},
+    {"measure": "points", "n": "10", "draw": "1", "bound": "6.5", "expected": "6.0"},
+    {"measure": "all points", "n": "1000", "draw": "0", "bound": "7.3", "expected": "7.05"},
+]
+
+
+def test_fig2_bars_average_the_draws_and_take_all_points_as_reference():
+    bars, reference = fig2_bars(FIG2_ROWS, "expected")
+    assert bars == [("triangle", 7.0, 0.0), ("centroid", 7.4, 0.0), ("area x centroid", 7.6, 0.0),
+                    ("10 points", 7.0, 1.0)]
+    assert reference == 7.05
+    assert fig2_bars(FIG2_ROWS, "bound")[1] == 7.3
+
+
+def test_table1_is_ours_beside_the_paper_with_errors_as_percent_of_icp():
+    means = {("bunny", "quadric1000-exact", "textbook", "kmeans", 100): (8.0, 0.1),
+             ("bunny", "quadric1000-vertices", "textbook", "kmeans", 100): (7.0, 0.1),
+             ("bunny", "quadric1000-exact", "authors", "kmeans", 100): (99.0, 0.1)}  # not Table 1's variant
+    rows = (reg_rows("bunny", "quadric1000", "icp", [2.0, 4.0], [1.0, 1.0])
+            + reg_rows("bunny", "quadric1000", "mesh-kmeans", [0.3, 0.9], [0.25, 0.25])
+            + reg_rows("bunny", "quadric1000", "points-kmeans", [1.5, 1.5], [0.5, 1.5])
+            + reg_rows("bunny", "res4", "icp", [100.0, 100.0], [100.0, 100.0]))  # Fig 5's mesh: not in Table 1
+    errors = registration_errors([{key: str(value) for key, value in row.items()} for row in rows])
+    table = {row["model"]: row for row in table1(means, errors)}
+    assert list(table) == list(MODELS)
+    bunny = table["bunny"]
+    assert (bunny["ll_points"], bunny["ll_mesh"]) == (7.0, 8.0)
+    assert bunny["rot_mesh"] == pytest.approx(20.0)       # 0.6 / 3
+    assert bunny["rot_points"] == pytest.approx(50.0)     # 1.5 / 3
+    assert bunny["trans_mesh"] == pytest.approx(25.0)     # 0.25 / 1
+    assert bunny["trans_points"] == pytest.approx(100.0)  # 1.0 / 1
+    assert (bunny["ll_points_paper"], bunny["ll_mesh_paper"], bunny["rot_mesh_paper"]) == (7.6, 8.2, 17.0)
+    assert math.isnan(table["lucy"]["ll_mesh"]) and table["lucy"]["ll_mesh_paper"] == -18.3
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Claims, by hand
+# ---------------------------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("gap, verdict", [(0.05, "reproduced"), (-0.1, "reproduced"), (0.3, "partly"),
+                                          (-0.5, "partly"), (0.6, "not reproduced")])
+def test_gap_rule(gap, verdict):
+    assert claims.gap_verdict(gap) == verdict
+
+
+@pytest.mark.parametrize("wins, total, verdict", [(10, 10, "reproduced"), (9, 10, "reproduced"),
+                                                  (8, 10, "partly"), (1, 2, "partly"), (4, 10, "not reproduced")])
+def test_share_rule(wins, total, verdict):
+    assert claims.share_verdict(wins, total) == verdict
+
+
+def test_fig2_claim_uses_the_papers_quantity():
+    # triangle − all points: −0.05 in the paper's quantity (reproduced), +0.2 in the bound.
+    claim = claims.bound_equals_dense(claims.Measurements(fig2=FIG2_ROWS))
+    assert claim.verdict == "reproduced"
+    assert "-0.050" in claim.evidence and "+0.200" in claim.evidence
+
+
+def means_of(cells):
+    """Likelihood means from ``{(input, variant, init, K): mean}`` for the bunny."""
+    return {("bunny", i, v, init, k): (mean, 0.0) for (i, v, init, k), mean in cells.items()}
+
+
+def test_ordering_claim_counts_init_k_cells():
+    cells = {}
+    for k, (exact, approx, centroids, vertices) in {25: (8, 7, 6, 5), 100: (8, 7, 7.5, 5)}.items():
+        for name, value in zip(claims.FIG3_INPUTS, (exact, approx, centroids, vertices)):
+            cells[name, "textbook", "kmeans", k] = value
+    claim = claims.mesh_beats_points(claims.Measurements(means=means_of(cells)))
+    assert claim.verdict == "partly"  # 1 of 2 cells: at K=100 centroids beat approx
+    assert "1 of 2" in claim.evidence and "kmeans K=100" in claim.evidence
+
+
+def test_robustness_claim_is_partly_when_only_the_authors_em_is_robust():
+    cells = {}
+    for k in (25, 100):
+        cells["res4-exact", "textbook", "kmeans", k] = 8.0
+        cells["res4-exact", "textbook", "random", k] = 6.5  # gap 1.5: not robust
+        cells["res4-exact", "authors", "kmeans", k] = 8.0
+        cells["res4-exact", "authors", "random", k] = 7.9   # gap 0.1: robust
+        cells["res4-vertices", "textbook", "kmeans", k] = 7.0  # points: not part of this claim
+        cells["res4-vertices", "textbook", "random", k] = 3.0
+    claim = claims.mesh_robust_to_init(claims.Measurements(means=means_of(cells)))
+    assert claim.verdict == "partly"
+    assert "textbook EM: 0 of 2" in claim.evidence and "authors EM: 2 of 2" in claim.evidence
+    for k in (25, 100):
+        cells["res4-exact", "textbook", "random", k] = 7.8
+    assert claims.mesh_robust_to_init(claims.Measurements(means=means_of(cells))).verdict == "reproduced"
+
+
+def test_registration_claims():
+    rows = (reg_rows("bunny", "res4", "mesh-kmeans", [0.3], [0.1]) + reg_rows("bunny", "res4", "icp", [2.0], [0.05])
+            + reg_rows("bunny", "res4", "cpd", [1.0], [0.4]))
+    errors = registration_errors([{key: str(value) for key, value in row.items()} for row in rows])
+    claim = claims.mesh_registers_best(claims.Measurements(errors=errors))
+    assert "wins 3 of 4" in claim.evidence and claim.verdict == "partly"  # ICP's translation is better
+    assert claims.mesh_registers_best(claims.Measurements()).verdict == "pending"
+    table = [dict(model="bunny", rot_mesh=20.0, rot_points=50.0, trans_mesh=120.0, trans_points=100.0,
+                  ll_mesh=8.0, ll_points=7.0)]
+    claim = claims.table1_registration(claims.Measurements(errors=errors, table1=table))
+    assert "2 of 4" in claim.evidence and claim.verdict == "partly"  # rotation: both won; translation: neither
+    assert claims.table1_likelihood(claims.Measurements(table1=table)).verdict == "reproduced"
+
+
+def test_figures_follow_the_configured_inputs():
+    pictures = ["res4", "full", "dense", "random", "clustering", "quadric", "poisson"]
+    everything = ["likelihood", "fig2", "registration", *pictures]
+    assert figure_names(everything, ["res4-exact", "quadric1000-exact", "bunny/res4"]) == \
+        ["fig1", "fig2", "fig3", "fig4", "fig5", "fig7"]
+    assert figure_names(["likelihood", "fig2", "res4"], ["res4-exact"]) == ["fig1", "fig2", "fig3"]
+    assert figure_names(everything, ["res4-exact", "bunny/quadric1000"]) == ["fig1", "fig2", "fig3", "fig7"]
+
+
+def test_markdown_and_html_rendering():
+    assert markdown_table(["a", "b"], [["1", "2"]]) == "| a | b |\n|---|---|\n| 1 | 2 |"
+    blocks = [("h1", "T"), ("p", "x < y, **bold**"), ("figure", "f", "cap")]
+    assert to_markdown(blocks) == "# T\n\nx < y, **bold**\n\n![f](figures/f.png)\n\n*cap*\n"
+    page = to_html(blocks, {"f": b"\x89PNG"}, "T")
+    assert "<p>x &lt; y, <strong>bold</strong></p>" in page
+    assert 'src="data:image/png;base64,iVBORw=="' in page
+
+
+# ---------------------------------------------------------------------------------------------------------
+# The rule, on synthetic tables, in Chromium
+# ---------------------------------------------------------------------------------------------------------
+
+FIG3_FIG4 = claims.FIG3_INPUTS + claims.FIG4_INPUTS
+
+
+def synthetic_results(results):
+    """Tables and bunny files shaped like the sweep's, small enough for a fast report."""
+    rng = np.random.default_rng(0)
+    rows = []
+    for index, name in enumerate(FIG3_FIG4):
+        sized = name.endswith(("exact", "approx"))
+        for variant in ("textbook", "authors") if sized else ("textbook",):
+            for init in ("kmeans", "random"):
+                for k in (25, 50, 200):  # K=100 of quadric1000-exact is Table 1's row, below
+                    for seed in range(2):
+                        rows.append(ll_row("bunny", name, k, init, variant, seed,
+                                           7.0 + 0.3 * np.log(k / 25) - 0.2 * index + 0.05 * seed))
+    for m, model in enumerate(MODELS):
+        for name, value in (("quadric1000-exact", 8.0 - m), ("quadric1000-vertices", 7.0 - m)):
+            rows.append(ll_row(model, name, 100, "kmeans", "textbook", 0, value))
+    write_csv(results / "tables" / "likelihood.csv", rows)
+    write_csv(results / "tables" / "fig2.csv", [{k: row[k] for k in row} for row in FIG2_ROWS])
+    reg = []
+    for method in ("mesh-kmeans", "mesh-random", "points-kmeans", "points-random", "icp", "cpd"):
+        reg += reg_rows("bunny", "res4", method, rng.lognormal(0, 1, 12), rng.lognormal(-2, 1, 12))
+    for model in MODELS:
+        for method in ("mesh-kmeans", "points-kmeans", "icp"):
+            reg += reg_rows(model, "quadric1000", method, rng.lognormal(0, 1, 3), rng.lognormal(-2, 1, 3))
+    write_csv(results / "tables" / "registration.csv", reg)
+    vertices, faces = load_mesh(SHARED_DATA / "stanford" / "bunny_res4.ply")
+    bunny = results / "data" / "bunny"
+    for name in ("res4", "full", "quadric1000", "clustering1000"):
+        save_ply(bunny / f"{name}.ply", vertices, faces)
+    for name, n in (("full_eval", 3000), ("poisson1000", 500), ("random1000", 500)):
+        save_ply(bunny / f"{name}.ply", vertices[rng.integers(len(vertices), size=n)] + rng.normal(0, 1e-3, (n, 3)))
+
+
+def run_report(workdir, config):
+    command = [str(SNAKEMAKE), "--snakefile", str(REPO / "Snakefile"), "--directory", str(workdir),
+               "--configfile", str(config), "--cores", "1", "out/report.html", "--allowed-rules", "report",
+               "--forcerun", "report"]
+    run = subprocess.run(command, capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stderr[-3000:]
+
+
+@pytest.fixture(scope="module")
+def built(tmp_path_factory):
+    """The report rule run twice on synthetic tables: (report folder, bytes of every file of the first run)."""
+    workdir = tmp_path_factory.mktemp("report")
+    synthetic_results(workdir / "results")
+    config = yaml.safe_load((REPO / "tests" / "config.yaml").read_text())
+    config["fit"]["experiments"]["figs"] = {"models": ["bunny"], "inputs": list(FIG3_FIG4), "components": [25],
+                                            "inits": ["kmeans", "random"]}
+    config["report"] = {"dir": "out"}
+    (workdir / "config.yaml").write_text(yaml.safe_dump(config))
+    run_report(workdir, workdir / "config.yaml")
+    out = workdir / "out"
+    first = {path.relative_to(out): path.read_bytes() for path in sorted(out.rglob("*")) if path.is_file()}
+    run_report(workdir, workdir / "config.yaml")
+    return out, first
+
+
+def test_report_writes_every_output(built):
+    out, first = built
+    names = {str(path) for path in first}
+    figures = {f"figures/{name}.png" for name in ("fig1", "fig2", "fig3", "fig4", "fig5", "fig7")}
+    assert names == {"report.html", "report.md", "table1.csv", "table1.md"} | figures
+    markdown = (out / "report.md").read_text()
+    assert "Pending: the odometry stage" in markdown
+    assert all(f"({figure})" in markdown for figure in figures)
+    assert len(re.findall(r"— \*\*(reproduced|partly|not reproduced|pending)\*\*", markdown)) == len(claims.CLAIMS)
+
+
+def test_regenerated_report_is_byte_identical(built):
+    out, first = built
+    for path, data in first.items():
+        assert (out / path).read_bytes() == data, path
+
+
+def test_table1_has_five_models_with_finite_numbers(built):
+    out, _ = built
+    rows = read_csv(out / "table1.csv")
+    assert [row["model"] for row in rows] == list(MODELS)
+    for m, row in enumerate(rows):
+        assert all(np.isfinite(float(value)) for key, value in row.items() if key != "model")
+        assert (float(row["ll_mesh"]), float(row["ll_points"])) == (8.0 - m, 7.0 - m)
+
+
+@pytest.mark.skipif(CHROMIUM is None, reason="Chromium is not installed (CI installs Debian's `chromium`; "
+                                             "`apt-get install chromium` to run this test)")
+def test_every_figure_loads_in_headless_chromium(built, tmp_path):
+    out, _ = built
+    page = (out / "report.html").read_text()
+    n_figures = page.count("<img ")
+    # A broken image as a control, then a script marking every image once the page has loaded.
+    probe = ('<img id="control" src="data:image/png;base64,AAAA"><script>window.addEventListener("load", () => '
+             '{for (const img of document.images) img.dataset.ok = img.naturalWidth > 0 ? "yes" : "no";});'
+             "</script></body>")
+    (tmp_path / "page.html").write_text(page.replace("</body>", probe))
+    run = subprocess.run([CHROMIUM, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
+                          "--no-first-run", "--disable-background-networking", "--disable-component-update",
+                          "--disable-sync", f"--user-data-dir={tmp_path / 'profile'}", "--virtual-time-budget=10000",
+                          "--dump-dom", (tmp_path / "page.html").as_uri()],
+                         capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0, run.stderr[-2000:]
+    tags = re.findall(r"<img[^>]*>", run.stdout)
+    marks = {("control" if 'id="control"' in tag else re.search(r'alt="(\w+)"', tag).group(1)):
+             re.search(r'data-ok="(\w+)"', tag).group(1) for tag in tags}
+    assert len(tags) == n_figures + 1 == 7
+    assert marks.pop("control") == "no"
+    assert marks == {name: "yes" for name in ("fig1", "fig2", "fig3", "fig4", "fig5", "fig7")}
