@@ -33,7 +33,7 @@ N_SIGMA = 1.5
 PICTURED_K = 100
 MESH_KEYS = ("res4", "full", "random", "clustering", "dense", "poisson", "quadric")
 """Data-stage files of the bunny the pictures read (Fig 1: res4; Fig 7: all)."""
-HEAD = (np.array([-0.08, 0.125, 0.02]), 0.025)
+HEAD = (np.array([-0.065, 0.125, 0.035]), 0.022)
 """Centre and radius (metres) of the bunny's head region in Fig 1."""
 
 
@@ -98,11 +98,10 @@ def _shade(polygons, color):
     return np.clip(rgb * intensity[:, None], 0, 1)
 
 
-def _add_polygons(ax, polygons, color, alpha=1.0, edge=None):
-    """Draw bunny-frame ``polygons`` (n, m, 3) shaded on a 3-D axes."""
+def _add_polygons(ax, polygons, color):
+    """Draw bunny-frame ``polygons`` (n, m, 3) shaded on a 3-D axes, in one colour or one RGB row each."""
     polygons = upright(polygons)
-    ax.add_collection3d(Poly3DCollection(polygons, facecolors=_shade(polygons, color), alpha=alpha,
-                                         edgecolors=edge or "none", linewidths=0.3))
+    ax.add_collection3d(Poly3DCollection(polygons, facecolors=_shade(polygons, color), edgecolors="none"))
 
 
 def _frame(ax, points, title):
@@ -139,8 +138,8 @@ def fig1_triangles(meshes):
     head = np.linalg.norm(prims.means - centre, axis=1) < radius
     figure = new_figure(8.0, 4.0)
     whole = figure.add_subplot(1, 2, 1, projection="3d")
-    _add_polygons(whole, vertices[faces[~head]], "lightgray")
-    _add_polygons(whole, vertices[faces[head]], "tab:orange")
+    colours = np.where(head[:, None], matplotlib.colors.to_rgb("tab:orange"), matplotlib.colors.to_rgb("lightgray"))
+    _add_polygons(whole, vertices[faces], colours)  # one collection: matplotlib depth-sorts within it only
     _frame(whole, vertices, f"bunny res4, {len(faces)} triangles, head in orange")
     detail = figure.add_subplot(1, 2, 2, projection="3d")
     detail.add_collection3d(Poly3DCollection(upright(vertices[faces[head]]), facecolors="none", edgecolors="k",

@@ -49,13 +49,14 @@ def likelihood_curves(means, model, inputs):
     Returns
     -------
     dict
-        ``(input, variant, init) -> (ks, mean, std)``, three ndarrays of shape (n_k,), inputs in the order given.
+        ``(input, variant, init) -> (ks, mean, std)``, three ndarrays of shape (n_k,); inputs in the order given,
+        textbook EM before other variants.
     """
     curves = defaultdict(list)
     for (row_model, input_name, variant, init, k), stats in means.items():
         if row_model == model and input_name in inputs:
             curves[input_name, variant, init].append((k, *stats))
-    order = sorted(curves, key=lambda key: (inputs.index(key[0]), key[1], key[2]))
+    order = sorted(curves, key=lambda key: (inputs.index(key[0]), key[1] != "textbook", key[2]))
     return {key: tuple(np.array(column) for column in zip(*sorted(curves[key]))) for key in order}
 
 
