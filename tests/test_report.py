@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
+from matplotlib.figure import Figure
 
 from dgmm.data import load_mesh, save_ply
 from dgmm.report import claims, figure_names
@@ -177,6 +178,7 @@ def test_markdown_and_html_rendering():
 # ---------------------------------------------------------------------------------------------------------
 
 FIG3_FIG4 = claims.FIG3_INPUTS + claims.FIG4_INPUTS
+FIGURES = ("fig1", "fig2", "fig3", "fig4", "fig5", "fig7")
 
 
 def synthetic_results(results):
@@ -203,6 +205,13 @@ def synthetic_results(results):
         for method in ("mesh-kmeans", "points-kmeans", "icp"):
             reg += reg_rows(model, "quadric1000", method, rng.lognormal(0, 1, 3), rng.lognormal(-2, 1, 3))
     write_csv(results / "tables" / "registration.csv", reg)
+    write_csv(results / "tables" / "odometry.csv", [
+        {"sequence": "synthetic", "method": method, "ate_rmse_m": ate, "frames": 8}
+        for method, ate in (("gmm-pixels", 0.01), ("gmm-points", 0.02), ("icp", 0.03))])
+    trajectories = Figure(figsize=(2, 2))
+    trajectories.add_subplot().plot([0, 1], [0, 1])
+    (results / "odometry").mkdir()
+    trajectories.savefig(results / "odometry" / "fig6.png")
     vertices, faces = load_mesh(SHARED_DATA / "stanford" / "bunny_res4.ply")
     bunny = results / "data" / "bunny"
     for name in ("res4", "full", "quadric1000", "clustering1000"):
@@ -221,7 +230,8 @@ def run_report(workdir, config):
 
 @pytest.fixture(scope="module")
 def built(tmp_path_factory):
-    """The report rule run twice on synthetic tables: (report folder, bytes of every file of the first run)."""
+    """The report rule run twice on synthetic tables: (report folder, bytes of every file of the first run, figure
+    names). Fig 6 is expected when tests/config.yaml configures the odometry stage."""
     workdir = tmp_path_factory.mktemp("report")
     synthetic_results(workdir / "results")
     config = yaml.safe_load((REPO / "tests" / "config.yaml").read_text())
@@ -233,28 +243,28 @@ def built(tmp_path_factory):
     out = workdir / "out"
     first = {path.relative_to(out): path.read_bytes() for path in sorted(out.rglob("*")) if path.is_file()}
     run_report(workdir, workdir / "config.yaml")
-    return out, first
+    return out, first, FIGURES + ("fig6",) * ("odometry" in config)
 
 
 def test_report_writes_every_output(built):
-    out, first = built
+    out, first, drawn = built
     names = {str(path) for path in first}
-    figures = {f"figures/{name}.png" for name in ("fig1", "fig2", "fig3", "fig4", "fig5", "fig7")}
+    figures = {f"figures/{name}.png" for name in drawn}
     assert names == {"report.html", "report.md", "table1.csv", "table1.md"} | figures
     markdown = (out / "report.md").read_text()
-    assert "Pending: the odometry stage" in markdown
+    assert ("Pending: waits for the odometry stage" in markdown) == ("fig6" not in drawn)
     assert all(f"({figure})" in markdown for figure in figures)
     assert len(re.findall(r"— \*\*(reproduced|partly|not reproduced|pending)\*\*", markdown)) == len(claims.CLAIMS)
 
 
 def test_regenerated_report_is_byte_identical(built):
-    out, first = built
+    out, first, _ = built
     for path, data in first.items():
         assert (out / path).read_bytes() == data, path
 
 
 def test_table1_has_five_models_with_finite_numbers(built):
-    out, _ = built
+    out, _, _ = built
     rows = read_csv(out / "table1.csv")
     assert [row["model"] for row in rows] == list(MODELS)
     for m, row in enumerate(rows):
@@ -265,7 +275,7 @@ def test_table1_has_five_models_with_finite_numbers(built):
 @pytest.mark.skipif(CHROMIUM is None, reason="Chromium is not installed (CI installs Debian's `chromium`; "
                                              "`apt-get install chromium` to run this test)")
 def test_every_figure_loads_in_headless_chromium(built, tmp_path):
-    out, _ = built
+    out, _, drawn = built
     page = (out / "report.html").read_text()
     n_figures = page.count("<img ")
     # A broken image as a control, then a script marking every image once the page has loaded.
@@ -282,6 +292,14 @@ def test_every_figure_loads_in_headless_chromium(built, tmp_path):
     tags = re.findall(r"<img[^>]*>", run.stdout)
     marks = {("control" if 'id="control"' in tag else re.search(r'alt="(\w+)"', tag).group(1)):
              re.search(r'data-ok="(\w+)"', tag).group(1) for tag in tags}
-    assert len(tags) == n_figures + 1 == 7
+    assert len(tags) == n_figures + 1 == len(drawn) + 1
     assert marks.pop("control") == "no"
-    assert marks == {name: "yes" for name in ("fig1", "fig2", "fig3", "fig4", "fig5", "fig7")}
+    assert marks == {name: "yes" for name in drawn}
+
+
+def test_odometry_claim():
+    rows = [{"sequence": "synthetic", "method": method, "ate_rmse_m": str(ate), "frames": "8"}
+            for method, ate in (("gmm-pixels", 0.5), ("gmm-points", 0.4), ("icp", 0.9))]
+    claim = claims.odometry(claims.Measurements(odometry=rows))
+    assert "wins 1 of 2" in claim.evidence and claim.verdict == "partly"  # beats ICP, not the point GMM
+    assert claims.odometry(claims.Measurements()).verdict == "pending"

@@ -1,6 +1,6 @@
 # Report (issue 6): Table 1, the paper's claims with verdicts and the figures, under report.dir (default reports/):
 #   report.html (self-contained), report.md, table1.csv, table1.md, figures/{name}.png
-# Inputs follow the configured stages: registration only when config has a `registration` section; figures whose
+# Inputs follow the configured stages: registration and odometry only when config has their sections; figures whose
 # inputs are not configured are left out and their sections say they are pending.
 from dgmm.report import figure_names
 
@@ -13,6 +13,8 @@ def report_inputs():
     inputs = {"likelihood": rules.likelihood_table.output.likelihood, "fig2": rules.fig2.output.table}
     if "registration" in config:
         inputs["registration"] = rules.registration_table.output.errors
+    if "odometry" in config:
+        inputs.update(odometry=f"{RESULTS}/tables/odometry.csv", fig6=f"{RESULTS}/odometry/fig6.png")
     if "bunny" in DATA["models"]:
         inputs.update(res4=f"{DATA_DIR}/bunny/res4.ply", full=f"{DATA_DIR}/bunny/full.ply",
                       dense=f"{DATA_DIR}/bunny/full_eval.ply")
