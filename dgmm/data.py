@@ -9,9 +9,7 @@ integer faces. Files are binary PLY (trimesh), written to a temporary name and r
 leaves no partial file.
 """
 import hashlib
-import os
 import sys
-import tempfile
 import urllib.error
 import urllib.request
 from dataclasses import dataclass
@@ -22,6 +20,7 @@ import trimesh
 from tqdm import tqdm
 
 from dgmm.errors import DataError
+from dgmm.files import atomic_open, atomic_path
 
 STANFORD = "http://graphics.stanford.edu/data/3Dscanrep/"
 CREDIT = "Stanford University Computer Graphics Laboratory, The Stanford 3D Scanning Repository"
@@ -112,19 +111,15 @@ def _download(remote, destination):
 
     The progress bar (on stderr) is shown only on a terminal.
     """
-    destination.parent.mkdir(parents=True, exist_ok=True)
-    fd, partial = tempfile.mkstemp(prefix=f".{remote.filename}.", suffix=".part", dir=destination.parent)
-    try:
-        with os.fdopen(fd, "wb") as out, urllib.request.urlopen(remote.url, timeout=30) as response:
+    with atomic_path(destination) as partial:
+        with open(partial, "wb") as out, urllib.request.urlopen(remote.url, timeout=30) as response:
             size = int(response.headers.get("Content-Length") or 0) or None
             with tqdm(total=size, unit="B", unit_scale=True, desc=remote.filename,
                       disable=not sys.stderr.isatty()) as bar:
                 for block in iter(lambda: response.read(1 << 16), b""):
                     out.write(block)
                     bar.update(len(block))
-        os.replace(_verified(Path(partial), remote, f"{remote.filename} from {remote.url}"), destination)
-    finally:
-        Path(partial).unlink(missing_ok=True)
+        _verified(partial, remote, f"{remote.filename} from {remote.url}")
     return destination
 
 
@@ -220,16 +215,9 @@ def save_ply(path, vertices, faces=None):
     vertices : array-like of shape (n_vertices, 3)
     faces : array-like of shape (n_faces, 3), optional
     """
-    path = Path(path)
     if faces is None:
         blob = trimesh.PointCloud(np.asarray(vertices)).export(file_type="ply")
     else:
         blob = trimesh.Trimesh(np.asarray(vertices), np.asarray(faces), process=False).export(file_type="ply")
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, partial = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=path.parent)
-    try:
-        with os.fdopen(fd, "wb") as out:
-            out.write(blob)
-        os.replace(partial, path)
-    finally:
-        Path(partial).unlink(missing_ok=True)
+    with atomic_open(path) as out:
+        out.write(blob)

@@ -27,3 +27,16 @@ def atomic_path(path):
         os.replace(partial, path)
     finally:
         partial.unlink(missing_ok=True)
+
+
+@contextmanager
+def atomic_open(path, mode="wb"):
+    """Open a temporary file beside ``path`` for writing; rename it to ``path`` once closed, if the block succeeds.
+
+    Examples
+    --------
+    >>> with atomic_open("model.npz") as stream:  # doctest: +SKIP
+    ...     numpy.savez(stream, weights=weights)
+    """
+    with atomic_path(path) as partial, open(partial, mode) as stream:
+        yield stream

@@ -12,14 +12,13 @@ Files are written to a temporary name beside the target and renamed, so a failed
 Every problem found on loading is one :class:`~dgmm.errors.DataError` line naming the file.
 """
 import json
-import os
-import tempfile
 import zipfile
 from pathlib import Path
 
 import numpy as np
 
 from dgmm.errors import DataError, FitError, InputError
+from dgmm.files import atomic_open
 from dgmm.mixture import GaussianMixture
 
 FORMAT_VERSION = 1
@@ -60,14 +59,8 @@ def save_model(path, model, params=None):
         "covariances": np.asarray(model.covariances_, dtype=np.float64),
         "params": np.array(text),
     }
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, partial = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=path.parent)
-    try:
-        with os.fdopen(fd, "wb") as out:
-            np.savez(out, **arrays)
-        os.replace(partial, path)
-    finally:
-        Path(partial).unlink(missing_ok=True)
+    with atomic_open(path) as out:
+        np.savez(out, **arrays)
 
 
 def _read_arrays(path):

@@ -20,8 +20,6 @@ registers with the determinant-free D2D cost; ``"gmm-points"`` does the same wit
 """
 from __future__ import annotations
 
-import os
-import tempfile
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -30,6 +28,7 @@ import numpy as np
 from PIL import Image, UnidentifiedImageError
 
 from dgmm.errors import DataError, InputError
+from dgmm.files import atomic_open
 from dgmm.mixture import GaussianMixture
 from dgmm.primitives import Primitives
 from dgmm.registration import Registration, kabsch, matrix_to_quaternion, quaternion_to_matrix, register_d2d, \
@@ -118,19 +117,6 @@ class Trajectory:
 
 
 # ------------------------------------------------------------------------------------------------ files
-def _atomic_write(path, write):
-    """Call ``write(stream)`` on a temporary file beside ``path``, then rename it to ``path``."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, partial_path = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=path.parent)
-    try:
-        with os.fdopen(fd, "wb") as stream:
-            write(stream)
-        os.replace(partial_path, path)
-    finally:
-        Path(partial_path).unlink(missing_ok=True)
-
-
 def read_rows(path, n_columns):
     """Rows of a TUM text file, comments and blank lines skipped.
 
@@ -205,7 +191,8 @@ def write_trajectory(path, trajectory, header="estimated trajectory"):
     table = np.column_stack([trajectory.timestamps, trajectory.translations, quaternions])
     text = f"# {header}\n# timestamp tx ty tz qx qy qz qw\n" + "".join(
         f"{row[0]:.6f} " + " ".join(f"{value:.9f}" for value in row[1:]) + "\n" for row in table)
-    _atomic_write(path, lambda stream: stream.write(text.encode()))
+    with atomic_open(path) as stream:
+        stream.write(text.encode())
 
 
 def associate(first, second, max_difference=MAX_TIME_DIFFERENCE):
@@ -272,7 +259,8 @@ def write_depth(path, depth):
     if depth.ndim != 2 or not np.all(np.isfinite(depth)) or depth.min() < 0 or depth.max() > 65535 / DEPTH_SCALE:
         raise InputError(f"depth must be a finite 2-D array in [0, {65535 / DEPTH_SCALE}] m")
     image = Image.fromarray(np.rint(depth * DEPTH_SCALE).astype(np.uint16))
-    _atomic_write(path, lambda stream: image.save(stream, format="PNG"))
+    with atomic_open(path) as stream:
+        image.save(stream, format="PNG")
 
 
 @dataclass(frozen=True)
@@ -610,3 +598,70 @@ def absolute_trajectory_error(estimate, reference, max_difference=MAX_TIME_DIFFE
     errors = np.linalg.norm(est @ rotation.T + translation - ref, axis=1)
     return TrajectoryError(float(np.sqrt(np.mean(errors ** 2))), errors, rotation, translation,
                            estimate.timestamps[first])
+
+
+# ------------------------------------------------------------------------------------------------ tables
+def first_frames(sequence, n_frames, max_difference=MAX_TIME_DIFFERENCE):
+    """The first ``n_frames`` frames of a sequence (all of them when it is shorter) and their ground truth.
+
+    Parameters
+    ----------
+    sequence : TumSequence
+    n_frames : int
+    max_difference : float
+
+    Returns
+    -------
+    frames : ndarray of shape (n_used,)
+        ``0, 1, …, min(n_frames, len(sequence)) − 1``.
+    groundtruth : Trajectory
+        Ground truth of those frames that have a partner within ``max_difference`` s, stamped with their depth
+        timestamps.
+
+    Raises
+    ------
+    DataError
+        The sequence has no ``groundtruth.txt``, or fewer than 3 of the frames have a ground-truth pose (the ATE
+        alignment would not be determined); the message names the file.
+    """
+    frames = np.arange(min(int(n_frames), len(sequence)))
+    matched, poses = sequence.groundtruth_at_frames(max_difference)
+    keep = matched < len(frames)
+    if keep.sum() < 3:
+        raise DataError(f"{sequence.folder / 'groundtruth.txt'}: only {int(keep.sum())} of the first {len(frames)} "
+                        f"depth frames have a ground-truth pose within {max_difference} s")
+    return frames, poses.subset(np.flatnonzero(keep))
+
+
+def frame_seconds(odometry):
+    """Per-frame timings of a run as table rows.
+
+    Returns
+    -------
+    rows : list of dict
+        One per frame: ``frame`` (position in the run), ``timestamp``, ``model_seconds`` (GMM fit, or ICP's
+        point sample) and ``registration_seconds`` (onto the previous frame; ``""`` for the first frame).
+    """
+    registration = ["", *odometry.registration_seconds.tolist()]
+    return [{"frame": index, "timestamp": f"{timestamp:.6f}", "model_seconds": float(model),
+             "registration_seconds": registered}
+            for index, (timestamp, model, registered) in enumerate(
+                zip(odometry.trajectory.timestamps, odometry.prepare_seconds, registration))]
+
+
+def seconds_summary(rows):
+    """Mean timings of one run from its ``frame_seconds`` rows (numbers or the strings of a CSV file).
+
+    Returns
+    -------
+    summary : dict
+        ``frames``; ``mean_model_seconds`` (over frames), ``mean_registration_seconds`` (over registrations) and
+        ``mean_seconds_per_frame``, their sum: the cost of adding one frame to the trajectory.
+    """
+    model = [float(row["model_seconds"]) for row in rows]
+    registration = [float(row["registration_seconds"]) for row in rows if row["registration_seconds"] != ""]
+    if not model or not registration:
+        raise InputError(f"timings of {len(rows)} frames: need at least one registration")
+    mean_model, mean_registration = float(np.mean(model)), float(np.mean(registration))
+    return {"frames": len(model), "mean_seconds_per_frame": mean_model + mean_registration,
+            "mean_model_seconds": mean_model, "mean_registration_seconds": mean_registration}

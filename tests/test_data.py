@@ -19,7 +19,7 @@ from scipy.spatial import cKDTree
 from sklearn.mixture import GaussianMixture
 
 from dgmm import DataError
-from dgmm import data
+from dgmm import files
 from dgmm.data import REGISTRY, fetch, load_mesh, load_points, save_ply
 from dgmm.meshes import decimate_quadric, poisson_disk
 
@@ -223,7 +223,7 @@ def test_save_and_load_round_trip(tmp_path):
 def test_failed_write_leaves_no_file(tmp_path, monkeypatch):
     def fail(*args):
         raise OSError("disk full")
-    monkeypatch.setattr(data.os, "replace", fail)
+    monkeypatch.setattr(files.os, "replace", fail)
     with pytest.raises(OSError):
         save_ply(tmp_path / "out" / "points.ply", np.zeros((4, 3)))
     assert os.listdir(tmp_path / "out") == []

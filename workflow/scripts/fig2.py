@@ -2,7 +2,6 @@
 triangle bound, centroids, area × centroids, and n sampled points (several draws per n)."""
 import sys
 
-import numpy as np
 import trimesh
 from threadpoolctl import threadpool_limits
 
