@@ -109,6 +109,17 @@ def test_fig2_claim_uses_the_papers_quantity():
     assert "-0.050" in claim.evidence and "+0.200" in claim.evidence
 
 
+def test_fig3_values_claim_takes_the_variant_closer_to_the_paper():
+    # paper: K=25 7.45, K=100 8.15, K=400 8.62
+    cells = {("res4-exact", "textbook", "kmeans", 25): 7.95, ("res4-exact", "textbook", "kmeans", 100): 8.15,
+             ("res4-exact", "authors", "kmeans", 25): 7.40, ("res4-exact", "authors", "kmeans", 400): 8.90}
+    claim = claims.fig3_values(claims.Measurements(means=means_of(cells)))
+    assert "K=25 7.95 (+0.50)" in claim.evidence and "K=400 8.90 (+0.28)" in claim.evidence
+    assert claim.verdict == "partly"  # textbook worst 0.50, authors worst 0.28: the closer one is within 0.5
+    cells["res4-exact", "authors", "kmeans", 400] = 8.60
+    assert claims.fig3_values(claims.Measurements(means=means_of(cells))).verdict == "reproduced"
+
+
 def means_of(cells):
     """Likelihood means from ``{(input, variant, init, K): mean}`` for the bunny."""
     return {("bunny", i, v, init, k): (mean, 0.0) for (i, v, init, k), mean in cells.items()}
