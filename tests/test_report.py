@@ -125,14 +125,21 @@ def means_of(cells):
     return {("bunny", i, v, init, k): (mean, 0.0) for (i, v, init, k), mean in cells.items()}
 
 
-def test_ordering_claim_counts_init_k_cells():
+def test_ordering_claim_counts_init_k_cells_with_ties():
     cells = {}
-    for k, (exact, approx, centroids, vertices) in {25: (8, 7, 6, 5), 100: (8, 7, 7.5, 5)}.items():
-        for name, value in zip(claims.FIG3_INPUTS, (exact, approx, centroids, vertices)):
+    values = {25: (8, 7, 6, 5), 100: (8, 8.05, 7.5, 5), 200: (7, 8, 6, 5)}  # win, tie within 0.1 (win), loss
+    for k, row in values.items():
+        for name, value in zip(claims.FIG3_INPUTS, row):
             cells[name, "textbook", "kmeans", k] = value
     claim = claims.mesh_beats_points(claims.Measurements(means=means_of(cells)))
-    assert claim.verdict == "partly"  # 1 of 2 cells: at K=100 centroids beat approx
-    assert "1 of 2" in claim.evidence and "kmeans K=100" in claim.evidence
+    assert "textbook EM: exact best in 2 of 3" in claim.evidence and "every point input in 3" in claim.evidence
+    assert claim.verdict == "partly"  # 2 of 3 < 90%, no authors' fits
+    for k in values:  # the authors' EM wins every cell: still partly, since textbook EM does not
+        cells["res4-exact", "authors", "kmeans", k] = 9.0
+    claim = claims.mesh_beats_points(claims.Measurements(means=means_of(cells)))
+    assert "authors EM: exact best in 3 of 3" in claim.evidence and claim.verdict == "partly"
+    cells["res4-exact", "textbook", "kmeans", 200] = 8.0
+    assert claims.mesh_beats_points(claims.Measurements(means=means_of(cells))).verdict == "reproduced"
 
 
 def test_robustness_claim_is_partly_when_only_the_authors_em_is_robust():
