@@ -212,18 +212,17 @@ def fig2_expressions(rows):
     bound_bars, bound_ref = fig2_bars(rows, "bound")
     labels = [label for label, _, _ in paper_bars]
     x = np.arange(len(labels))
-    figure = new_figure(7.5, 4.6)
+    figure = new_figure(8.0, 4.6)
     ax = figure.add_subplot()
     values = [mean for _, mean, _ in paper_bars] + [mean for _, mean, _ in bound_bars] + [paper_ref, bound_ref]
     low = min(values) - 0.3
     ax.bar(x, [mean - low for _, mean, _ in paper_bars], bottom=low, yerr=[std for _, _, std in paper_bars],
            color=["tab:orange"] * 3 + ["tab:blue"] * (len(labels) - 3), capsize=3,
-           label="paper's quantity: Σᵢ ηᵢₚ log ρᵢₚ (without entropy), ±1 std over draws")
+           label="paper's quantity Σᵢ ηᵢₚ log ρᵢₚ (no entropy), ±1 std")
     ax.errorbar(x, [mean for _, mean, _ in bound_bars], yerr=[std for _, _, std in bound_bars], fmt="D",
-                color="k", markersize=4, capsize=2, label="our EM bound (with the responsibilities' entropy)")
+                color="k", markersize=4, capsize=2, label="our EM bound (with entropy)")
     ax.axhline(paper_ref, color="tab:red", label=f"all points, paper's quantity ({paper_ref:.3f})")
-    ax.axhline(bound_ref, color="tab:red", linestyle="--", label=f"all points, our bound = mean log-likelihood "
-                                                               f"({bound_ref:.3f})")
+    ax.axhline(bound_ref, color="tab:red", linestyle="--", label=f"all points, our bound ({bound_ref:.3f})")
     ax.set(xticks=x, xticklabels=labels, ylim=(low, max(values) + 0.35),
            ylabel="log-likelihood per unit size (nats)", xlabel="expression (mesh) or number of sampled points")
     ax.tick_params(axis="x", labelrotation=20)
