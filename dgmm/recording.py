@@ -14,6 +14,9 @@ iteration (iteration = 1, 2, ...) with ``model.weights_ (n_components,)``, ``mod
 - :class:`RegistrationRecorder` does the same for registration trials (``dgmm.trials.run_trials``): every
   trial's true and estimated pose and errors to MCAP, the source points of chosen trials moving iteration by
   iteration to rerun (registration methods call ``callback(iteration, registration)``).
+- :class:`OdometryRecorder` is ``dgmm.odometry.run_odometry``'s ``callback``: per-frame timings and the estimated
+  and ground-truth trajectories to MCAP, the camera path and each frame's mixture to rerun on the ``frame``
+  timeline.
 
 Every file is written under a temporary name beside its target and renamed on a clean close, so a failed job
 leaves no partial output. Ellipsoids come from :func:`covariance_ellipsoids`, shared by both writers.
@@ -215,6 +218,33 @@ REGISTRATION_TRIAL_SCHEMA = {
 """One trial on ``/registration/trial``; its poses go to ``/registration/true_pose`` and
 ``/registration/estimated_pose`` at the same log time. ``centre`` is the point the translation error is
 measured at (the source centroid)."""
+
+ODOMETRY_PARAMS_SCHEMA = {
+    "title": "dgmm.OdometryParams",
+    "description": "Parameters of the run (sequence, method, frames, settings, seed), written once",
+    "type": "object",
+}
+
+ODOMETRY_FRAME_SCHEMA = {
+    "title": "dgmm.OdometryFrame",
+    "description": "One frame of frame-to-frame odometry: its model and its registration onto the previous frame",
+    "type": "object",
+    "properties": {
+        "index": {"type": "integer", "minimum": 0, "description": "Frame index in the sequence"},
+        "timestamp": {"type": "number", "description": "Depth timestamp (s)"},
+        "model_seconds": {"type": "number", "minimum": 0,
+                          "description": "Time to build the frame's model (GMM fit, or ICP's point sample)"},
+        "registration_seconds": {"type": ["number", "null"], "minimum": 0,
+                                 "description": "Time to register onto the previous frame; null for the first"},
+        "iterations": {"type": ["integer", "null"], "minimum": 0},
+        "converged": {"type": ["boolean", "null"]},
+        "objective": {"type": ["number", "null"]},
+    },
+    "required": ["index", "timestamp", "model_seconds", "registration_seconds", "iterations", "converged",
+                 "objective"],
+    "additionalProperties": False,
+}
+"""One frame on ``/odometry/frame``, logged at the frame's timestamp."""
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -478,20 +508,22 @@ class RerunRecorder:
 
     __call__ = log_iteration
 
-    def log(self, entity, archetype, iteration=None):
+    def log(self, entity, archetype, iteration=None, timeline="iteration"):
         """Log any rerun archetype on ``entity``: static without ``iteration``, else at that step of the
-        ``iteration`` timeline.
+        sequence timeline ``timeline``.
 
         Parameters
         ----------
         entity : str
         archetype : rerun archetype
         iteration : int, optional
+        timeline : str, default="iteration"
+            E.g. ``"frame"`` for odometry.
         """
         if iteration is None:
             self._stream.log(entity, archetype, static=True)
         else:
-            self._stream.set_time("iteration", sequence=iteration)
+            self._stream.set_time(timeline, sequence=iteration)
             self._stream.log(entity, archetype)
 
     def close(self):
@@ -777,6 +809,162 @@ class RegistrationRecorder:
                 rotation[None], translation[None], log_time_ns=log_time, frame_id="model"),
                 POSES_IN_FRAME_SCHEMA, log_time)
         self._trial = None
+
+    def close(self):
+        """Finish both files and rename them into place."""
+        self._mcap.close()
+        if self._rerun is not None:
+            self._rerun.close()
+
+    def abort(self):
+        """Discard both files."""
+        self._mcap.abort()
+        if self._rerun is not None:
+            self._rerun.abort()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, exc_type, exc, tb):
+        if exc_type is None:
+            self.close()
+        else:
+            self.abort()
+
+
+_GROUNDTRUTH_COLOR, _ESTIMATE_COLOR = (40, 170, 80), (255, 140, 0)
+
+
+def _ns(seconds):
+    """Integer nanoseconds of a timestamp in seconds."""
+    return int(round(float(seconds) * 1e9))
+
+
+class OdometryRecorder:
+    """Callback of ``dgmm.odometry.run_odometry`` that records a visual-odometry run to MCAP and to rerun.
+
+    Poses are camera → frame ``x -> R x + t`` (``dgmm.odometry`` conventions). The estimate lives in the frame
+    ``"odometry"`` (the first camera); ``"world"`` is the ground truth's frame. For display, the estimate is also
+    drawn anchored at the first frame's ground-truth pose, ``T_world = G_0 T_odometry`` (evo's origin alignment),
+    so both paths start together and the drift is visible.
+
+    MCAP topics, JSON, log times = frame timestamps: ``/odometry/params`` (once), ``/odometry/frame`` (each frame,
+    :data:`ODOMETRY_FRAME_SCHEMA`), and at the last frame's time ``foxglove.PosesInFrame`` messages holding every
+    pose: ``/odometry/estimated`` (frame ``"odometry"``, the poses of the trajectory file),
+    ``/odometry/estimated_in_world`` (anchored, frame ``"world"``) and ``/odometry/groundtruth`` (frame
+    ``"world"``, the ground truth at the recorded frames, when given).
+
+    rerun entities (``world`` is z-up, as TUM's and the synthetic ground truth are): ``world/groundtruth`` (static
+    line strip), and on the sequence timeline ``frame``: ``world/estimated`` (the anchored path so far),
+    ``world/camera`` (its pose), ``world/camera/image`` (the pinhole, static), ``world/camera/model`` (the
+    frame's mixture as ellipsoids in camera coordinates, or ICP's points), ``seconds/model`` and
+    ``seconds/registration``.
+
+    Parameters
+    ----------
+    mcap_path : str or path-like
+    rrd_path : str or path-like, optional
+    params : dict, optional
+        Written to ``/odometry/params``.
+    groundtruth : dgmm.odometry.Trajectory, optional
+        Ground truth at the frames that will be recorded, in frame order; its first pose anchors the display.
+    intrinsics : dgmm.odometry.Intrinsics, optional
+        Drawn as the camera's pinhole.
+    n_sigma : float, default=2.0
+
+    Examples
+    --------
+    >>> with OdometryRecorder("odometry.mcap", "odometry.rrd", groundtruth=truth) as recorder:  # doctest: +SKIP
+    ...     result = run_odometry(sequence, "gmm-pixels", frames, callback=recorder)
+    ...     recorder.finish(result.trajectory)
+    """
+
+    def __init__(self, mcap_path, rrd_path=None, *, params=None, groundtruth=None, intrinsics=None,
+                 n_sigma=DEFAULT_N_SIGMA):
+        self.n_sigma = n_sigma
+        self.groundtruth = groundtruth
+        if groundtruth is not None and len(groundtruth):
+            self._anchor = (np.asarray(groundtruth.rotations[0]), np.asarray(groundtruth.translations[0]))
+        else:
+            self._anchor = (np.eye(3), np.zeros(3))
+        self._path = []
+        self._last_time = 0
+        self._mcap = McapWriter(mcap_path)
+        self._rerun = None
+        try:
+            start = 0 if groundtruth is None or not len(groundtruth) else _ns(groundtruth.timestamps[0])
+            self._mcap.write("/odometry/params", params or {}, ODOMETRY_PARAMS_SCHEMA, start)
+            if rrd_path is not None:
+                self._rerun = RerunRecorder(rrd_path, n_sigma=n_sigma)
+                self._rerun.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP)
+                if groundtruth is not None:
+                    self._rerun.log("world/groundtruth", rr.LineStrips3D([groundtruth.translations],
+                                                                         colors=_GROUNDTRUTH_COLOR))
+                if intrinsics is not None:
+                    self._rerun.log("world/camera/image", rr.Pinhole(
+                        focal_length=[intrinsics.fx, intrinsics.fy], principal_point=[intrinsics.cx, intrinsics.cy],
+                        resolution=[intrinsics.width, intrinsics.height], camera_xyz=rr.ViewCoordinates.RDF,
+                        image_plane_distance=0.2))
+        except BaseException:
+            self.abort()
+            raise
+
+    def _in_world(self, rotation, translation):
+        """The anchored pose ``G_0 T`` of an odometry-frame pose."""
+        anchor_rotation, anchor_translation = self._anchor
+        return anchor_rotation @ rotation, anchor_rotation @ translation + anchor_translation
+
+    def __call__(self, frame):
+        """Record one frame (``run_odometry``'s ``callback``).
+
+        Parameters
+        ----------
+        frame : dgmm.odometry.OdometryFrame
+        """
+        registration = frame.registration
+        self._last_time = _ns(frame.timestamp)
+        message = {"index": frame.index, "timestamp": frame.timestamp, "model_seconds": frame.prepare_seconds,
+                   "registration_seconds": None if registration is None else float(registration.seconds),
+                   "iterations": None if registration is None else int(registration.iterations),
+                   "converged": None if registration is None else bool(registration.converged),
+                   "objective": None if registration is None else float(registration.objective)}
+        self._mcap.write("/odometry/frame", message, ODOMETRY_FRAME_SCHEMA, self._last_time)
+        if self._rerun is None:
+            return
+        rotation, translation = self._in_world(frame.rotation, frame.translation)
+        self._path.append(translation)
+        log = self._rerun.log
+        log("world/estimated", rr.LineStrips3D([np.array(self._path)], colors=_ESTIMATE_COLOR), frame.index,
+            "frame")
+        log("world/camera", rr.Transform3D(translation=translation, mat3x3=rotation), frame.index, "frame")
+        if hasattr(frame.model, "means_"):
+            shown = _ellipsoids(frame.model.means_, frame.model.covariances_, self.n_sigma)
+        else:
+            shown = rr.Points3D(np.asarray(frame.model), colors=_ESTIMATE_COLOR, radii=0.005)
+        log("world/camera/model", shown, frame.index, "frame")
+        log("seconds/model", rr.Scalars(frame.prepare_seconds), frame.index, "frame")
+        if registration is not None:
+            log("seconds/registration", rr.Scalars(registration.seconds), frame.index, "frame")
+
+    def finish(self, trajectory):
+        """Write the whole estimated trajectory (and the ground truth) as ``foxglove.PosesInFrame`` messages.
+
+        Parameters
+        ----------
+        trajectory : dgmm.odometry.Trajectory
+            The run's estimate (``Odometry.trajectory``).
+        """
+        rotations, translations = np.asarray(trajectory.rotations), np.asarray(trajectory.translations)
+        anchor_rotation, anchor_translation = self._anchor
+        world = (anchor_rotation @ rotations, translations @ anchor_rotation.T + anchor_translation)
+        messages = [("/odometry/estimated", (rotations, translations), "odometry"),
+                    ("/odometry/estimated_in_world", world, "world")]
+        if self.groundtruth is not None:
+            messages.append(("/odometry/groundtruth", (self.groundtruth.rotations, self.groundtruth.translations),
+                             "world"))
+        for topic, (r, t), frame_id in messages:
+            self._mcap.write(topic, poses_in_frame(r, t, log_time_ns=self._last_time, frame_id=frame_id),
+                             POSES_IN_FRAME_SCHEMA, self._last_time)
 
     def close(self):
         """Finish both files and rename them into place."""

@@ -11,4 +11,5 @@ RESULTS = config.get("results", "results")
 
 def get_final_output():
     """Every target of `rule all`: the outputs of each stage."""
-    return [*rules.data.input, *rules.fits.input, *rules.registration.input, *rules.report.output]
+    return [*rules.data.input, *rules.fits.input, *rules.registration.input, *rules.odometry.input,
+            *rules.report.output]

@@ -1,0 +1,222 @@
+"""The odometry stage (Fig 6) run by real Snakemake on tests/config.yaml: 8 frames of the synthetic sequence.
+
+References are independent of the code under test: evo's APE (Umeyama alignment without scale) recomputed from the
+written TUM files, numpy's reading of those files for the MCAP poses, `rerun rrd verify`, Pillow for the PNG.
+"""
+import math
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+from PIL import Image
+
+from dgmm.errors import DataError
+from dgmm.odometry import first_frames, read_sequence, seconds_summary
+from dgmm.tables import read_csv
+from tests.test_recording import read_mcap, read_rrd
+
+REPO = Path(__file__).resolve().parents[1]
+SNAKEMAKE = Path(sys.executable).with_name("snakemake")
+RERUN = Path(sys.executable).with_name("rerun")
+TEST_CONFIG = yaml.safe_load((REPO / "tests" / "config.yaml").read_text())
+METHODS = ["gmm-pixels", "gmm-points", "icp"]
+N_FRAMES = TEST_CONFIG["odometry"]["frames"]
+
+
+def snakemake_command(workdir, *targets, configfile=REPO / "tests" / "config.yaml"):
+    return [str(SNAKEMAKE), "--snakefile", str(REPO / "Snakefile"), "--directory", str(workdir),
+            "--configfile", str(configfile), "--cores", "2", *targets]
+
+
+def write_config(tmp_path, **odometry):
+    """tests/config.yaml with its odometry section updated; returns the new file's path."""
+    config = yaml.safe_load((REPO / "tests" / "config.yaml").read_text())
+    config["odometry"] = {**config["odometry"], **odometry}
+    path = tmp_path / "config.yaml"
+    path.write_text(yaml.safe_dump(config))
+    return path
+
+
+@pytest.fixture(scope="module")
+def stage(tmp_path_factory):
+    """Results of one `snakemake odometry` on the tiny config (no TUM folder: the synthetic sequence)."""
+    workdir = tmp_path_factory.mktemp("odometry")
+    run = subprocess.run(snakemake_command(workdir, "odometry"), capture_output=True, text=True, timeout=900)
+    assert run.returncode == 0, run.stderr[-3000:]
+    return workdir / "results"
+
+
+def tum_rows(path):
+    """A TUM file's rows as an array of shape (n, 8), read with numpy."""
+    return np.loadtxt(path, comments="#", ndmin=2)
+
+
+@pytest.mark.slow
+def test_every_output_exists(stage):
+    sequence = stage / "odometry" / "synthetic" / "sequence"
+    assert len(list((sequence / "depth").glob("*.png"))) == N_FRAMES
+    assert (sequence / "groundtruth.txt").is_file()
+    for method in METHODS:
+        job = stage / "odometry" / "synthetic" / method
+        assert sorted(p.name for p in job.iterdir()) == sorted(
+            ["trajectory.txt", "ate.csv", "seconds.csv", "odometry.mcap", "odometry.rrd"])
+        assert len(tum_rows(job / "trajectory.txt")) == N_FRAMES
+    for table in ("odometry.csv", "odometry_seconds.csv"):
+        assert (stage / "tables" / table).is_file()
+    png = (stage / "odometry" / "fig6.png").read_bytes()
+    assert png.startswith(b"\x89PNG") and b"tIME" not in png and b"Software" not in png
+    with Image.open(stage / "odometry" / "fig6.png") as image:
+        assert min(image.size) > 300
+    assert not list(stage.rglob("*.part")) and not list(stage.rglob("*.tmp"))
+
+
+@pytest.mark.slow
+def test_table_has_every_method_with_finite_ate(stage):
+    rows = read_csv(stage / "tables" / "odometry.csv")
+    assert list(rows[0]) == ["sequence", "method", "ate_rmse_m", "frames"]
+    assert [row["method"] for row in rows] == METHODS
+    for row in rows:
+        assert row["sequence"] == "synthetic" and int(row["frames"]) == N_FRAMES
+        assert math.isfinite(float(row["ate_rmse_m"])) and float(row["ate_rmse_m"]) >= 0
+    seconds = read_csv(stage / "tables" / "odometry_seconds.csv")
+    assert [row["method"] for row in seconds] == METHODS
+    for row, method in zip(seconds, METHODS):
+        frames = read_csv(stage / "odometry" / "synthetic" / method / "seconds.csv")
+        assert len(frames) == N_FRAMES and frames[0]["registration_seconds"] == ""
+        model = np.mean([float(f["model_seconds"]) for f in frames])
+        registration = np.mean([float(f["registration_seconds"]) for f in frames[1:]])
+        assert float(row["mean_seconds_per_frame"]) == pytest.approx(model + registration, rel=1e-12)
+        assert float(row["mean_seconds_per_frame"]) > 0
+
+
+@pytest.mark.slow
+def test_ate_equals_evo(stage):
+    """The table's ATE is evo's APE RMSE (translation, Umeyama alignment without scale) of the written files."""
+    from evo.core import metrics, sync
+    from evo.tools import file_interface
+
+    groundtruth = stage / "odometry" / "synthetic" / "sequence" / "groundtruth.txt"
+    table = {row["method"]: float(row["ate_rmse_m"]) for row in read_csv(stage / "tables" / "odometry.csv")}
+    for method in METHODS:
+        estimate = stage / "odometry" / "synthetic" / method / "trajectory.txt"
+        ref, est = sync.associate_trajectories(file_interface.read_tum_trajectory_file(groundtruth),
+                                               file_interface.read_tum_trajectory_file(estimate), max_diff=0.02)
+        assert est.num_poses == N_FRAMES
+        est.align(ref, correct_scale=False)
+        ape = metrics.APE(metrics.PoseRelation.translation_part)
+        ape.process_data((ref, est))
+        assert table[method] == pytest.approx(ape.get_statistic(metrics.StatisticsType.rmse), abs=1e-6)
+
+
+@pytest.mark.slow
+def test_mcap_poses_equal_the_trajectory_files(stage):
+    truth = tum_rows(stage / "odometry" / "synthetic" / "sequence" / "groundtruth.txt")
+    for method in METHODS:
+        job = stage / "odometry" / "synthetic" / method
+        messages = read_mcap(job / "odometry.mcap")
+        by_topic = {}
+        for topic, schema, message, _ in messages:
+            by_topic.setdefault(topic, []).append((schema.name, message))
+        frames = [message for _, message in by_topic["/odometry/frame"]]
+        assert [frame["index"] for frame in frames] == list(range(N_FRAMES))
+        assert frames[0]["registration_seconds"] is None and all(f["registration_seconds"] > 0 for f in frames[1:])
+        written = tum_rows(job / "trajectory.txt")
+        ((schema, estimated),) = by_topic["/odometry/estimated"]
+        assert schema == "foxglove.PosesInFrame" and estimated["frame_id"] == "odometry"
+        positions = np.array([[p["position"][k] for k in "xyz"] for p in estimated["poses"]])
+        quaternions = np.array([[p["orientation"][k] for k in "xyzw"] for p in estimated["poses"]])
+        np.testing.assert_allclose(positions, written[:, 1:4], rtol=0, atol=1e-8)
+        signs = np.sign(np.sum(quaternions * written[:, 4:], axis=1))
+        np.testing.assert_allclose(quaternions * signs[:, None], written[:, 4:], rtol=0, atol=1e-8)
+        # Ground truth: the groundtruth.txt rows at the frames' timestamps.
+        ((schema, groundtruth),) = by_topic["/odometry/groundtruth"]
+        rows = truth[[np.argmin(np.abs(truth[:, 0] - stamp)) for stamp in written[:, 0]]]
+        np.testing.assert_allclose([[p["position"][k] for k in "xyz"] for p in groundtruth["poses"]], rows[:, 1:4],
+                                   rtol=0, atol=1e-8)
+
+
+@pytest.mark.slow
+def test_rrd_verifies_and_holds_every_frame(stage):
+    for method in METHODS:
+        path = stage / "odometry" / "synthetic" / method / "odometry.rrd"
+        verify = subprocess.run([str(RERUN), "rrd", "verify", str(path)], capture_output=True, text=True)
+        assert verify.returncode == 0, verify.stderr
+        model = read_rrd(path, "/world/camera/model")
+        assert sorted(model["frame"]) == list(range(N_FRAMES))
+        if method == "icp":
+            sizes = [len(points) for points in model["Points3D:positions"]]
+            assert sizes == [TEST_CONFIG["odometry"]["icp_points"]] * N_FRAMES
+        else:
+            sizes = [len(centers) for centers in model["Ellipsoids3D:centers"]]
+            assert sizes == [TEST_CONFIG["odometry"]["components"]] * N_FRAMES
+        assert sorted(read_rrd(path, "/world/camera")["frame"]) == list(range(N_FRAMES))
+
+
+@pytest.mark.slow
+def test_rerun_gives_byte_identical_ate(stage, tmp_path):
+    """Same config and seed: a second run of a job writes the same trajectory and ATE row, byte for byte."""
+    for part in ("data/bunny/res4.ply", "odometry/synthetic/sequence"):
+        source, target = stage / part, tmp_path / "results" / part
+        target.parent.mkdir(parents=True, exist_ok=True)
+        (shutil.copytree if source.is_dir() else shutil.copy2)(source, target)
+    job = "odometry/synthetic/icp"
+    run = subprocess.run(snakemake_command(tmp_path, f"results/{job}/ate.csv"), capture_output=True, text=True,
+                         timeout=600)
+    assert run.returncode == 0, run.stderr[-3000:]
+    for name in ("ate.csv", "trajectory.txt"):
+        assert (tmp_path / "results" / job / name).read_bytes() == (stage / job / name).read_bytes()
+
+
+@pytest.mark.slow
+def test_broken_real_sequence_fails_with_one_line_naming_the_file(stage, tmp_path):
+    """A configured TUM folder that exists is used; a corrupt depth PNG stops the job with one line naming it."""
+    folder = tmp_path / "rgbd_dataset_freiburg3_long_office_household"
+    (folder / "depth").mkdir(parents=True)
+    shutil.copy(stage / "odometry" / "synthetic" / "sequence" / "groundtruth.txt", folder / "groundtruth.txt")
+    stamps = tum_rows(folder / "groundtruth.txt")[:9:3, 0]
+    listing = "".join(f"{stamp:.6f} depth/{stamp:.6f}.png\n" for stamp in stamps)
+    (folder / "depth.txt").write_text("# timestamp filename\n" + listing)
+    for stamp in stamps:
+        (folder / "depth" / f"{stamp:.6f}.png").write_bytes(b"not a png")
+    workdir = tmp_path / "work"
+    run = subprocess.run(snakemake_command(workdir, "odometry", configfile=write_config(
+        tmp_path, sequence=str(folder), methods=["icp"])), capture_output=True, text=True, timeout=600)
+    assert run.returncode != 0
+    log = (workdir / "results" / "logs" / "odometry" / folder.name / "icp.log").read_text()
+    message = log.strip().splitlines()[-1]  # the traceback's last line is the exception and its message
+    assert message.startswith("dgmm.errors.DataError: ")
+    assert str(folder / "depth" / f"{stamps[0]:.6f}.png") in message
+    # The real folder was used (no synthetic sequence) and the failed job left no file behind.
+    assert [p for p in (workdir / "results").rglob("*") if p.is_file() and "logs" not in p.parts] == []
+
+
+def test_sequence_without_enough_groundtruth_names_the_file(tmp_path):
+    folder = tmp_path / "seq"
+    folder.mkdir()
+    (folder / "depth.txt").write_text("".join(f"{10 + k / 30:.6f} depth/{k}.png\n" for k in range(5)))
+    with pytest.raises(DataError, match="groundtruth.txt"):
+        first_frames(read_sequence(folder), 5)
+    (folder / "groundtruth.txt").write_text("10.000000 0 0 0 0 0 0 1\n10.033333 0 0 0 0 0 0 1\n")
+    with pytest.raises(DataError, match=str(folder / "groundtruth.txt")) as caught:
+        first_frames(read_sequence(folder), 5)
+    assert "\n" not in str(caught.value)
+
+
+def test_seconds_summary_adds_the_mean_model_and_registration_times():
+    rows = [{"model_seconds": "1.0", "registration_seconds": ""},
+            {"model_seconds": "3.0", "registration_seconds": "0.5"},
+            {"model_seconds": "2.0", "registration_seconds": "1.5"}]
+    summary = seconds_summary(rows)
+    assert summary["frames"] == 3
+    assert summary["mean_seconds_per_frame"] == pytest.approx(2.0 + 1.0)
+
+
+def test_bad_config_value_names_the_key(tmp_path):
+    run = subprocess.run(snakemake_command(tmp_path, "-n", "odometry", configfile=write_config(tmp_path, frames=1)),
+                         capture_output=True, text=True, timeout=300)
+    assert run.returncode != 0
+    assert "frames" in run.stdout + run.stderr

@@ -1,0 +1,17 @@
+"""Job: render the synthetic TUM-format sequence (dgmm.synthetic): the room with the configured data-stage meshes."""
+import sys
+
+from threadpoolctl import threadpool_limits
+
+from dgmm.data import load_mesh
+from dgmm.sweep import job_seed
+from dgmm.synthetic import room_scene, write_synthetic_sequence
+
+smk = snakemake  # noqa: F821 (injected by Snakemake)
+sys.stderr = open(smk.log[0], "w")
+models = [vertices[faces] for vertices, faces in map(load_mesh, smk.input.meshes)]
+seed = job_seed(smk.params.seed, "odometry/synthetic", 0)
+with threadpool_limits(smk.threads):
+    sequence = write_synthetic_sequence(smk.output.sequence, room_scene(models), n_frames=smk.params.frames,
+                                        seed=seed)
+print(f"{smk.output.sequence}: {len(sequence)} frames, seed {seed}", file=sys.stderr)
