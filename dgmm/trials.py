@@ -68,14 +68,11 @@ METHODS = {
 }
 """The paper's Fig 5 methods: P2D on mesh and point mixtures, point-to-point ICP and CPD."""
 
-# algorithm -> register(moved source, target points, mixture, callback, **options)
+# algorithm -> register(moved source, target points, mixture, callback=..., **options)
 _ALGORITHMS = {
-    "p2d": lambda moved, target, mixture, callback, **options: register_p2d(moved, mixture, callback=callback,
-                                                                          **options),
-    "icp": lambda moved, target, mixture, callback, **options: register_icp(moved, target, callback=callback,
-                                                                          **options),
-    "cpd": lambda moved, target, mixture, callback, **options: register_cpd(moved, target, callback=callback,
-                                                                          **options),
+    "p2d": lambda moved, target, mixture, **options: register_p2d(moved, mixture, **options),
+    "icp": lambda moved, target, mixture, **options: register_icp(moved, target, **options),
+    "cpd": lambda moved, target, mixture, **options: register_cpd(moved, target, **options),
 }
 
 
@@ -220,7 +217,7 @@ def run_trials(method, setups, diagonal, *, mixture=None, options=None, recorder
         callback = None if recorder is None else recorder.begin_trial(setup.index, setup.trial, setup.source,
                                                                       shown_target)
         start = time.perf_counter()
-        result = register(setup.moved, setup.target, mixture, callback, **settings)
+        result = register(setup.moved, setup.target, mixture, callback=callback, **settings)
         seconds.append(time.perf_counter() - start)
         rotation_error, translation_error = registration_errors(result, setup.trial, diagonal)
         if recorder is not None:

@@ -1,0 +1,74 @@
+"""dgmm.trials: seeded trials shared by every method, the methods table, run_trials on known poses."""
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from dgmm.errors import InputError
+from dgmm.mixture import GaussianMixture
+from dgmm.trials import METHODS, bounding_diagonal, make_trials, run_trials
+
+
+def sphere_points(n, seed=0):
+    """n points uniform on the unit sphere, stretched into an asymmetric ellipsoid (no rotational symmetry)."""
+    directions = np.random.default_rng(seed).normal(size=(n, 3))
+    return directions / np.linalg.norm(directions, axis=1, keepdims=True) * [1.0, 0.6, 0.3]
+
+
+def test_a_trial_does_not_depend_on_the_other_trials_asked_for():
+    dense = sphere_points(2000)
+    together = make_trials(dense, 100, range(5), root_seed=3, key="m/mesh", diagonal=2.0)
+    alone = make_trials(dense, 100, [3], root_seed=3, key="m/mesh", diagonal=2.0)[0]
+    assert alone.index == together[3].index == 3
+    np.testing.assert_array_equal(alone.source, together[3].source)
+    np.testing.assert_array_equal(alone.target, together[3].target)
+    np.testing.assert_array_equal(alone.trial.rotation, together[3].trial.rotation)
+    other = make_trials(dense, 100, [3], root_seed=3, key="m/other", diagonal=2.0)[0]
+    assert not np.array_equal(other.source, alone.source)
+
+
+def test_trial_points_are_distinct_rows_of_the_dense_sample_moved_within_the_protocol():
+    dense = sphere_points(500)
+    diagonal = bounding_diagonal(dense)
+    for setup in make_trials(dense, 200, range(10), root_seed=0, key="k", diagonal=diagonal):
+        rows = {tuple(row) for row in dense}
+        assert all(tuple(p) in rows for p in setup.source) and all(tuple(p) in rows for p in setup.target)
+        assert len({tuple(p) for p in setup.source}) == 200  # drawn without replacement
+        np.testing.assert_allclose(setup.trial.centre, setup.source.mean(axis=0))
+        angles = Rotation.from_matrix(setup.trial.rotation).as_euler("xyz", degrees=True)
+        assert np.all(np.abs(angles) <= 15.0)
+        assert np.all(np.abs(setup.trial.translation) <= 0.05 * diagonal / 0.24077)
+
+
+def test_bounding_diagonal_of_a_box():
+    corners = np.array([[0, 0, 0], [3, 4, 12], [1, 1, 1]], dtype=float)
+    assert bounding_diagonal(corners) == 13.0
+
+
+def test_methods_table_names_the_papers_methods():
+    assert set(METHODS) == {"mesh-kmeans", "mesh-random", "points-kmeans", "points-random", "icp", "cpd"}
+    assert [name for name, method in METHODS.items() if method.needs_mixture] == [
+        "mesh-kmeans", "mesh-random", "points-kmeans", "points-random"]
+
+
+def test_every_method_undoes_small_trials_on_a_dense_target():
+    """With source and target from the same dense sample, every method recovers the pose to within the spacing."""
+    dense = sphere_points(3000, seed=1)
+    diagonal = bounding_diagonal(dense)
+    setups = make_trials(dense, 300, range(2), root_seed=0, key="sphere", diagonal=diagonal, max_angle_deg=5.0,
+                         max_translation=0.01)
+    mixture = GaussianMixture(20, random_state=0, max_iter=100, tol=1e-6).fit(dense)
+    for method in ("points-kmeans", "icp", "cpd"):
+        rows, seconds = run_trials(method, setups, diagonal, mixture=mixture)
+        assert [row["trial"] for row in rows] == [0, 1] and len(seconds) == 2
+        for row in rows:
+            assert row["rotation_error_deg"] < 3.0 and row["translation_error_pct"] < 2.0, (method, row)
+
+
+def test_bad_method_or_missing_mixture_is_an_input_error():
+    setups = make_trials(sphere_points(100), 10, [0], root_seed=0, key="k", diagonal=1.0)
+    with pytest.raises(InputError, match="must be one of"):
+        run_trials("p2p", setups, 1.0)
+    with pytest.raises(InputError, match="needs a fitted mixture"):
+        run_trials("mesh-kmeans", setups, 1.0)
+    with pytest.raises(InputError, match="n_points"):
+        make_trials(sphere_points(100), 101, [0], root_seed=0, key="k", diagonal=1.0)
