@@ -207,6 +207,26 @@ def test_p2d_recovers_a_known_motion(bunny, bunny_trial, gradient):
     assert rotation_deg < 1.0 and translation_pct < 0.5
 
 
+def _scaled_mixture(mixture, factor):
+    """The mixture of ``factor * x``: the same model in other length units."""
+    covariances = factor**2 * mixture.covariances_
+    return SimpleNamespace(weights_=mixture.weights_, means_=factor * mixture.means_, covariances_=covariances,
+                           precisions_cholesky_=np.linalg.inv(np.linalg.cholesky(covariances)).transpose(0, 2, 1))
+
+
+@pytest.mark.parametrize("method", ["p2d", "d2d"])
+def test_registration_does_not_depend_on_length_units(bunny, bunny_trial, method):
+    """The same problem in metres and in millimetres must give the same rotation and the same translation."""
+    c, r, t = bunny_trial.centre, bunny_trial.rotation, bunny_trial.translation
+    source = bunny_trial.apply(bunny.vertices)
+    moving = _transformed_mixture(bunny.mixture, r, c + t - r @ c)
+    register = {"p2d": lambda f: reg.register_p2d(f * source, _scaled_mixture(bunny.mixture, f)),
+                "d2d": lambda f: reg.register_d2d(_scaled_mixture(bunny.mixture, f), _scaled_mixture(moving, f))}
+    metres, millimetres = register[method](1.0), register[method](1000.0)
+    assert reg.rotation_distance_deg(metres.rotation, millimetres.rotation) < 1e-4
+    np.testing.assert_allclose(millimetres.translation / 1000.0, metres.translation, atol=1e-6 * bunny.diagonal)
+
+
 def test_p2d_callback_sees_every_iteration(bunny, bunny_trial):
     source = bunny_trial.apply(bunny.vertices)
     seen = []
