@@ -21,6 +21,7 @@ test: $(STAMP)
 
 bench: $(STAMP)
 	$(VENV)/bin/python benchmarks/em_speed.py
+	$(VENV)/bin/python benchmarks/registration_speed.py
 
 clean:
 	rm -rf results .snakemake
