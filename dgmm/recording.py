@@ -33,6 +33,7 @@ from mcap.writer import Writer
 from scipy.spatial.transform import Rotation
 
 from dgmm.errors import InputError
+from dgmm.files import temporary_path
 
 TICK_NS = 1_000_000
 """Log-time step between consecutive MCAP messages, in nanoseconds (1 ms, counted from the Unix epoch)."""
@@ -346,9 +347,35 @@ def poses_in_frame(rotations, translations, *, log_time_ns, frame_id="world"):
 # Writers
 # ---------------------------------------------------------------------------------------------------------
 
-def _temporary_path(path):
-    """Hidden temporary name beside ``path``, unique to this process."""
-    return path.with_name(f".{path.name}.{os.getpid()}.tmp")
+class _Output:
+    """An output written to a temporary file: a context manager that closes it (renaming it into place) when the
+    block succeeds and aborts it (discarding it) when the block raises. Subclasses define ``close`` and ``abort``."""
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, exc_type, exc, tb):
+        if exc_type is None:
+            self.close()
+        else:
+            self.abort()
+
+
+class _Recording(_Output):
+    """An MCAP file (``self._mcap``) and an optional rerun recording (``self._rerun``), kept or discarded
+    together."""
+
+    def close(self):
+        """Finish both files and rename them into place."""
+        self._mcap.close()
+        if self._rerun is not None:
+            self._rerun.close()
+
+    def abort(self):
+        """Discard both files."""
+        self._mcap.abort()
+        if self._rerun is not None:
+            self._rerun.abort()
 
 
 def _json_default(value):
@@ -358,7 +385,7 @@ def _json_default(value):
     raise TypeError(f"{type(value).__name__} is not JSON serialisable")
 
 
-class McapWriter:
+class McapWriter(_Output):
     """An MCAP file of JSON messages, each topic a channel with a JSON schema, written atomically.
 
     Use as a context manager: on a clean exit the file is renamed into place, on an exception it is removed.
@@ -376,7 +403,7 @@ class McapWriter:
 
     def __init__(self, path):
         self.path = Path(path)
-        self._temporary = _temporary_path(self.path)
+        self._temporary = temporary_path(self.path)
         self._stream = open(self._temporary, "wb")
         self._writer = Writer(self._stream)
         self._writer.start(profile="", library="dgmm")
@@ -431,15 +458,6 @@ class McapWriter:
         self._stream.close()
         self._temporary.unlink(missing_ok=True)
 
-    def __enter__(self):
-        return self
-
-    def __exit__(self, exc_type, exc, tb):
-        if exc_type is None:
-            self.close()
-        else:
-            self.abort()
-
 
 def _ellipsoids(means, covariances, n_sigma):
     """``rr.Ellipsoids3D`` of a mixture's components, one class id per component."""
@@ -448,7 +466,7 @@ def _ellipsoids(means, covariances, n_sigma):
                            class_ids=np.arange(len(half_sizes)))
 
 
-class RerunRecorder:
+class RerunRecorder(_Output):
     """A rerun recording (``.rrd``) of one fit, written atomically.
 
     Entities: ``input`` (static ``Mesh3D`` or ``Points3D``), ``mixture`` (``Ellipsoids3D``) and ``bound``
@@ -469,7 +487,7 @@ class RerunRecorder:
     def __init__(self, path, *, application_id="dgmm", recording_id=None, n_sigma=DEFAULT_N_SIGMA):
         self.path = Path(path)
         self.n_sigma = n_sigma
-        self._temporary = _temporary_path(self.path)
+        self._temporary = temporary_path(self.path)
         self._stream = rr.RecordingStream(application_id, recording_id=recording_id or self.path.stem,
                                           send_properties=False)
         self._stream.set_log_time_enabled(False)
@@ -537,17 +555,8 @@ class RerunRecorder:
         self._stream.disconnect()
         self._temporary.unlink(missing_ok=True)
 
-    def __enter__(self):
-        return self
 
-    def __exit__(self, exc_type, exc, tb):
-        if exc_type is None:
-            self.close()
-        else:
-            self.abort()
-
-
-class FitRecorder:
+class FitRecorder(_Recording):
     """Callback that records the fits of several seeds: all to one MCAP file, the first to rerun.
 
     MCAP topics: ``/fit/params`` (once, :data:`FIT_PARAMS_SCHEMA`), ``/fit/iteration`` (per seed and
@@ -646,32 +655,12 @@ class FitRecorder:
         self._mcap.write("/fit/mixture", message, SCENE_UPDATE_SCHEMA)
         self._seed = None
 
-    def close(self):
-        """Finish both files and rename them into place."""
-        self._mcap.close()
-        if self._rerun is not None:
-            self._rerun.close()
-
-    def abort(self):
-        """Discard both files."""
-        self._mcap.abort()
-        if self._rerun is not None:
-            self._rerun.abort()
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, exc_type, exc, tb):
-        if exc_type is None:
-            self.close()
-        else:
-            self.abort()
 
 
 _TRUTH_COLOR, _SOURCE_COLOR, _TARGET_COLOR = (160, 160, 160), (255, 140, 0), (40, 170, 80)
 
 
-class RegistrationRecorder:
+class RegistrationRecorder(_Recording):
     """Callback that records registration trials: all to one MCAP file, chosen trials iteration by iteration to
     rerun.
 
@@ -810,26 +799,6 @@ class RegistrationRecorder:
                 POSES_IN_FRAME_SCHEMA, log_time)
         self._trial = None
 
-    def close(self):
-        """Finish both files and rename them into place."""
-        self._mcap.close()
-        if self._rerun is not None:
-            self._rerun.close()
-
-    def abort(self):
-        """Discard both files."""
-        self._mcap.abort()
-        if self._rerun is not None:
-            self._rerun.abort()
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, exc_type, exc, tb):
-        if exc_type is None:
-            self.close()
-        else:
-            self.abort()
 
 
 _GROUNDTRUTH_COLOR, _ESTIMATE_COLOR = (40, 170, 80), (255, 140, 0)
@@ -840,7 +809,7 @@ def _ns(seconds):
     return int(round(float(seconds) * 1e9))
 
 
-class OdometryRecorder:
+class OdometryRecorder(_Recording):
     """Callback of ``dgmm.odometry.run_odometry`` that records a visual-odometry run to MCAP and to rerun.
 
     Poses are camera → frame ``x -> R x + t`` (``dgmm.odometry`` conventions). The estimate lives in the frame
@@ -966,23 +935,3 @@ class OdometryRecorder:
             self._mcap.write(topic, poses_in_frame(r, t, log_time_ns=self._last_time, frame_id=frame_id),
                              POSES_IN_FRAME_SCHEMA, self._last_time)
 
-    def close(self):
-        """Finish both files and rename them into place."""
-        self._mcap.close()
-        if self._rerun is not None:
-            self._rerun.close()
-
-    def abort(self):
-        """Discard both files."""
-        self._mcap.abort()
-        if self._rerun is not None:
-            self._rerun.abort()
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, exc_type, exc, tb):
-        if exc_type is None:
-            self.close()
-        else:
-            self.abort()
