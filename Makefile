@@ -17,6 +17,7 @@ run: $(STAMP)
 	$(VENV)/bin/snakemake --cores $(CORES)
 
 test: $(STAMP)
+	bash tests/system_packages.sh
 	$(VENV)/bin/python -m pytest -q
 
 bench: $(STAMP)
