@@ -7,7 +7,7 @@ FIG2 = config["fig2"]
 
 rule likelihood_table:
     input:
-        scores=fit_outputs("scores.csv"),
+        likelihood=fit_outputs("scores.csv"),
         seconds=fit_outputs("seconds.csv"),
     output:
         likelihood=f"{RESULTS}/tables/likelihood.csv",
@@ -20,7 +20,7 @@ rule likelihood_table:
         runtime=5,
         cpus_per_task=1,
     script:
-        "../scripts/likelihood_table.py"
+        "../scripts/concat_tables.py"
 
 
 rule fig2:
