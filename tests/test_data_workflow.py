@@ -4,8 +4,6 @@ Expected counts come from the mirror's SOURCE.md (bunny 34834 used vertices / 69
 from the config's budgets; nothing is compared with numbers the workflow printed.
 """
 import subprocess
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -13,22 +11,20 @@ import trimesh
 import yaml
 
 from dgmm.data import load_mesh, load_points
+from tests.workflow import REPO, TEST_CONFIG, TEST_CONFIG_FILE, snakemake_command
 
-REPO = Path(__file__).resolve().parents[1]
-SNAKEMAKE = Path(sys.executable).with_name("snakemake")
-TEST_CONFIG = yaml.safe_load((REPO / "tests" / "config.yaml").read_text())["data"]
+DATA = TEST_CONFIG["data"]
 
 
-def _snakemake(workdir, *args, configfile=REPO / "tests" / "config.yaml"):
+def _snakemake(workdir, *args, configfile=TEST_CONFIG_FILE):
     """Run the repository's Snakefile with ``workdir`` as working directory; return the completed process."""
-    command = [str(SNAKEMAKE), "--snakefile", str(REPO / "Snakefile"), "--directory", str(workdir),
-               "--configfile", str(configfile), "--cores", "2", *args]
-    return subprocess.run(command, capture_output=True, text=True, timeout=600)
+    return subprocess.run(snakemake_command(workdir, *args, configfile=configfile), capture_output=True, text=True,
+                          timeout=600)
 
 
 def test_test_config_mirror_is_the_shared_stanford_folder():
     """Relative mirror paths are read from the repository root, so any working directory finds the same mirror."""
-    mirror = (REPO / TEST_CONFIG["mirrors"][0]).resolve()
+    mirror = (REPO / DATA["mirrors"][0]).resolve()
     assert mirror == (REPO.parent / "shared" / "data" / "stanford").resolve()
     assert (mirror / "bunny.ply").is_file()
 
@@ -45,7 +41,7 @@ def built(tmp_path_factory):
 @pytest.mark.slow
 def test_data_outputs_and_counts(built):
     folder = built / "data" / "bunny"
-    n_eval, (budget,) = TEST_CONFIG["eval_points"], TEST_CONFIG["budgets"]
+    n_eval, (budget,) = DATA["eval_points"], DATA["budgets"]
     vertices, faces = load_mesh(folder / "full.ply")
     assert vertices.shape == (34834, 3) and faces.shape == (69451, 3)
     source = trimesh.load(REPO.parent / "shared" / "data" / "stanford" / "bunny.ply", process=False)
@@ -65,7 +61,7 @@ def test_data_outputs_and_counts(built):
         assert np.all(points >= low - 1e-6) and np.all(points <= high + 1e-6)
     assert sorted(p.name for p in folder.iterdir()) == sorted(
         ["full.ply", "res4.ply", "full_eval.ply", "res4_eval.ply"]
-        + [f"{method}{budget}.ply" for method in TEST_CONFIG["methods"]])
+        + [f"{method}{budget}.ply" for method in DATA["methods"]])
     assert len(list((built / "logs" / "data" / "bunny").glob("*.log"))) == 8
 
 
@@ -82,8 +78,8 @@ def test_wrong_sha256_fails_without_output(tmp_path):
     mirror = tmp_path / "mirror"
     mirror.mkdir()
     (mirror / "bunny.ply").write_bytes(b"ply\nformat ascii 1.0\nend_header\n")
-    config = {**yaml.safe_load((REPO / "tests" / "config.yaml").read_text())}
-    config["data"] = {**TEST_CONFIG, "mirrors": [str(mirror)], "cache": str(tmp_path / "cache")}
+    config = {**yaml.safe_load(TEST_CONFIG_FILE.read_text())}
+    config["data"] = {**DATA, "mirrors": [str(mirror)], "cache": str(tmp_path / "cache")}
     (tmp_path / "config.yaml").write_text(yaml.safe_dump(config))
     workdir = tmp_path / "work"
     run = _snakemake(workdir, "results/data/bunny/full.ply", configfile=tmp_path / "config.yaml")
@@ -96,8 +92,8 @@ def test_wrong_sha256_fails_without_output(tmp_path):
 
 
 def test_bad_config_value_names_the_key(tmp_path):
-    config = {**yaml.safe_load((REPO / "tests" / "config.yaml").read_text())}
-    config["data"] = {**TEST_CONFIG, "eval_points": -5}
+    config = {**yaml.safe_load(TEST_CONFIG_FILE.read_text())}
+    config["data"] = {**DATA, "eval_points": -5}
     (tmp_path / "config.yaml").write_text(yaml.safe_dump(config))
     run = _snakemake(tmp_path, "-n", "data", configfile=tmp_path / "config.yaml")
     assert run.returncode != 0

@@ -2,26 +2,17 @@
 import shutil
 import signal
 import subprocess
-import sys
 import time
 from collections import defaultdict
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 from dgmm.tables import read_csv
 from tests.test_recording import read_mcap, read_rrd
+from tests.workflow import RERUN, snakemake_command
 
-REPO = Path(__file__).resolve().parents[1]
-SNAKEMAKE = Path(sys.executable).with_name("snakemake")
-RERUN = Path(sys.executable).with_name("rerun")
 pytestmark = pytest.mark.slow
-
-
-def snakemake_command(workdir, *targets):
-    return [str(SNAKEMAKE), "--snakefile", str(REPO / "Snakefile"), "--directory", str(workdir),
-            "--configfile", str(REPO / "tests" / "config.yaml"), "--cores", "2", *targets]
 
 
 @pytest.fixture(scope="module")

@@ -6,8 +6,6 @@ written TUM files, numpy's reading of those files for the MCAP poses, `rerun rrd
 import math
 import shutil
 import subprocess
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -18,23 +16,15 @@ from dgmm.errors import DataError
 from dgmm.odometry import first_frames, read_sequence, seconds_summary
 from dgmm.tables import read_csv
 from tests.test_recording import read_mcap, read_rrd
+from tests.workflow import RERUN, TEST_CONFIG, TEST_CONFIG_FILE, snakemake_command
 
-REPO = Path(__file__).resolve().parents[1]
-SNAKEMAKE = Path(sys.executable).with_name("snakemake")
-RERUN = Path(sys.executable).with_name("rerun")
-TEST_CONFIG = yaml.safe_load((REPO / "tests" / "config.yaml").read_text())
 METHODS = ["gmm-pixels", "gmm-points", "icp"]
 N_FRAMES = TEST_CONFIG["odometry"]["frames"]
 
 
-def snakemake_command(workdir, *targets, configfile=REPO / "tests" / "config.yaml"):
-    return [str(SNAKEMAKE), "--snakefile", str(REPO / "Snakefile"), "--directory", str(workdir),
-            "--configfile", str(configfile), "--cores", "2", *targets]
-
-
 def write_config(tmp_path, **odometry):
     """tests/config.yaml with its odometry section updated; returns the new file's path."""
-    config = yaml.safe_load((REPO / "tests" / "config.yaml").read_text())
+    config = yaml.safe_load(TEST_CONFIG_FILE.read_text())
     config["odometry"] = {**config["odometry"], **odometry}
     path = tmp_path / "config.yaml"
     path.write_text(yaml.safe_dump(config))

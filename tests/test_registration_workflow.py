@@ -6,32 +6,23 @@ errors are recomputed from the recorded poses with quaternion algebra written ou
 """
 import shutil
 import subprocess
-import sys
 from collections import defaultdict
 from pathlib import Path
 
 import numpy as np
 import pytest
 import trimesh
-import yaml
 from scipy.spatial.transform import Rotation
 
 from dgmm.tables import read_csv
 from tests.test_recording import read_mcap, read_rrd
+from tests.workflow import RERUN, TEST_CONFIG, snakemake_command
 
-REPO = Path(__file__).resolve().parents[1]
-SNAKEMAKE = Path(sys.executable).with_name("snakemake")
-RERUN = Path(sys.executable).with_name("rerun")
-CONFIG = yaml.safe_load((REPO / "tests" / "config.yaml").read_text())
+CONFIG = TEST_CONFIG
 REG = CONFIG["registration"]
 COLUMNS = ["model", "mesh", "method", "trial", "rotation_error_deg", "translation_error_pct", "iterations",
            "converged"]
 pytestmark = pytest.mark.slow
-
-
-def snakemake_command(workdir, *targets):
-    return [str(SNAKEMAKE), *targets, "--snakefile", str(REPO / "Snakefile"), "--directory", str(workdir),
-            "--configfile", str(REPO / "tests" / "config.yaml"), "--cores", "2"]
 
 
 @pytest.fixture(scope="module")
