@@ -348,9 +348,9 @@ class GaussianMixture(BaseEstimator):
         self._check_parameters(prims)
         scale, mstep_weights = VARIANTS[self.variant](prims.weights)
         centre = np.average(prims.means, axis=0, weights=mstep_weights)
-        features = _moment_features(prims.means, prims.covariances, centre, scale)
-        weighted_moments = _moment_features(prims.means, prims.covariances, centre, 1.0)[:, :10]
-        weighted_moments *= mstep_weights[:, None]
+        features = _moment_features(prims.means, prims.covariances, centre, 1.0)
+        weighted_moments = features[:, :10] * mstep_weights[:, None]
+        features[:, :10] *= scale[:, None]
         rng = np.random.default_rng(self.random_state)
 
         weights, means, prec_chol = self._initial_params(prims, centre, mstep_weights, weighted_moments, rng)
