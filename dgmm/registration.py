@@ -159,10 +159,7 @@ def rotvec_to_matrix(rotvecs):
     -------
     rotations : ndarray of shape (3, 3) or (n_rotations, 3, 3)
     """
-    v = np.asarray(rotvecs, dtype=np.float64)
-    if v.shape[-1:] != (3,) or v.ndim > 2 or not np.all(np.isfinite(v)):
-        raise InputError(f"rotvecs must be finite with shape (3,) or (n, 3), got {v.shape}")
-    return Rotation.from_rotvec(v).as_matrix()
+    return Rotation.from_rotvec(_as_vectors("rotvecs", rotvecs)).as_matrix()
 
 
 def matrix_to_rotvec(rotations):
@@ -192,10 +189,15 @@ def euler_to_matrix(angles_deg):
     -------
     rotations : ndarray of shape (3, 3) or (n_rotations, 3, 3)
     """
-    angles = np.asarray(angles_deg, dtype=np.float64)
-    if angles.shape[-1:] != (3,) or angles.ndim > 2 or not np.all(np.isfinite(angles)):
-        raise InputError(f"angles_deg must be finite with shape (3,) or (n, 3), got {angles.shape}")
-    return Rotation.from_euler("xyz", angles, degrees=True).as_matrix()
+    return Rotation.from_euler("xyz", _as_vectors("angles_deg", angles_deg), degrees=True).as_matrix()
+
+
+def _as_vectors(name, vectors):
+    """Return ``vectors`` as finite float64 of shape (3,) or (n, 3), or raise."""
+    values = np.asarray(vectors, dtype=np.float64)
+    if values.shape[-1:] != (3,) or values.ndim > 2 or not np.all(np.isfinite(values)):
+        raise InputError(f"{name} must be finite with shape (3,) or (n, 3), got {values.shape}")
+    return values
 
 
 def _as_rotations(name, rotations):

@@ -3,7 +3,6 @@
 Expected counts come from the mirror's SOURCE.md (bunny 34834 used vertices / 69451 faces, res4 453 / 948) and
 from the config's budgets; nothing is compared with numbers the workflow printed.
 """
-import subprocess
 
 import numpy as np
 import pytest
@@ -11,15 +10,14 @@ import trimesh
 import yaml
 
 from dgmm.data import load_mesh, load_points
-from tests.workflow import REPO, TEST_CONFIG, TEST_CONFIG_FILE, snakemake_command
+from tests.workflow import REPO, TEST_CONFIG, TEST_CONFIG_FILE, run_snakemake
 
 DATA = TEST_CONFIG["data"]
 
 
 def _snakemake(workdir, *args, configfile=TEST_CONFIG_FILE):
     """Run the repository's Snakefile with ``workdir`` as working directory; return the completed process."""
-    return subprocess.run(snakemake_command(workdir, *args, configfile=configfile), capture_output=True, text=True,
-                          timeout=600)
+    return run_snakemake(workdir, *args, configfile=configfile, timeout=600)
 
 
 def test_test_config_mirror_is_the_shared_stanford_folder():

@@ -10,7 +10,7 @@ import pytest
 
 from dgmm.tables import read_csv
 from tests.test_recording import read_mcap, read_rrd
-from tests.workflow import RERUN, snakemake_command
+from tests.workflow import RERUN, run_snakemake, snakemake_command
 
 pytestmark = pytest.mark.slow
 
@@ -19,7 +19,7 @@ pytestmark = pytest.mark.slow
 def sweep(tmp_path_factory):
     """Results of one uninterrupted `snakemake fits` on the tiny config."""
     workdir = tmp_path_factory.mktemp("fits")
-    run = subprocess.run(snakemake_command(workdir, "fits"), capture_output=True, text=True, timeout=900)
+    run = run_snakemake(workdir, "fits")
     assert run.returncode == 0, run.stderr[-3000:]
     return workdir / "results"
 
@@ -95,7 +95,7 @@ def test_interrupted_sweep_resumes_without_redoing_jobs(sweep, tmp_path):
     assert 3 <= len(done) < 12, "the sweep should have been interrupted part-way"
     assert not list(tmp_path.rglob("*.part")), "an interrupted job left a partial file"
 
-    rerun = subprocess.run(snakemake_command(tmp_path, "fits"), capture_output=True, text=True, timeout=900)
+    rerun = run_snakemake(tmp_path, "fits")
     assert rerun.returncode == 0, rerun.stderr[-3000:]
     assert all(path.stat().st_mtime_ns == mtime for path, mtime in done.items())
     table = "tables/likelihood.csv"

@@ -16,7 +16,7 @@ from dgmm.errors import DataError
 from dgmm.odometry import first_frames, read_sequence, seconds_summary
 from dgmm.tables import read_csv
 from tests.test_recording import read_mcap, read_rrd
-from tests.workflow import RERUN, TEST_CONFIG, TEST_CONFIG_FILE, snakemake_command
+from tests.workflow import RERUN, TEST_CONFIG, TEST_CONFIG_FILE, run_snakemake
 
 METHODS = ["gmm-pixels", "gmm-points", "icp"]
 N_FRAMES = TEST_CONFIG["odometry"]["frames"]
@@ -35,7 +35,7 @@ def write_config(tmp_path, **odometry):
 def stage(tmp_path_factory):
     """Results of one `snakemake odometry` on the tiny config (no TUM folder: the synthetic sequence)."""
     workdir = tmp_path_factory.mktemp("odometry")
-    run = subprocess.run(snakemake_command(workdir, "odometry"), capture_output=True, text=True, timeout=900)
+    run = run_snakemake(workdir, "odometry")
     assert run.returncode == 0, run.stderr[-3000:]
     return workdir / "results"
 
@@ -154,8 +154,7 @@ def test_rerun_gives_byte_identical_ate(stage, tmp_path):
         target.parent.mkdir(parents=True, exist_ok=True)
         (shutil.copytree if source.is_dir() else shutil.copy2)(source, target)
     job = "odometry/synthetic/icp"
-    run = subprocess.run(snakemake_command(tmp_path, f"results/{job}/ate.csv"), capture_output=True, text=True,
-                         timeout=600)
+    run = run_snakemake(tmp_path, f"results/{job}/ate.csv", timeout=600)
     assert run.returncode == 0, run.stderr[-3000:]
     for name in ("ate.csv", "trajectory.txt"):
         assert (tmp_path / "results" / job / name).read_bytes() == (stage / job / name).read_bytes()
@@ -173,8 +172,8 @@ def test_broken_real_sequence_fails_with_one_line_naming_the_file(stage, tmp_pat
     for stamp in stamps:
         (folder / "depth" / f"{stamp:.6f}.png").write_bytes(b"not a png")
     workdir = tmp_path / "work"
-    run = subprocess.run(snakemake_command(workdir, "odometry", configfile=write_config(
-        tmp_path, sequence=str(folder), methods=["icp"])), capture_output=True, text=True, timeout=600)
+    run = run_snakemake(workdir, "odometry", configfile=write_config(
+        tmp_path, sequence=str(folder), methods=["icp"]), timeout=600)
     assert run.returncode != 0
     log = (workdir / "results" / "logs" / "odometry" / folder.name / "icp.log").read_text()
     message = log.strip().splitlines()[-1]  # the traceback's last line is the exception and its message
@@ -206,7 +205,6 @@ def test_seconds_summary_adds_the_mean_model_and_registration_times():
 
 
 def test_bad_config_value_names_the_key(tmp_path):
-    run = subprocess.run(snakemake_command(tmp_path, "-n", "odometry", configfile=write_config(tmp_path, frames=1)),
-                         capture_output=True, text=True, timeout=300)
+    run = run_snakemake(tmp_path, "-n", "odometry", configfile=write_config(tmp_path, frames=1), timeout=300)
     assert run.returncode != 0
     assert "frames" in run.stdout + run.stderr

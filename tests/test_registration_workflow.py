@@ -16,10 +16,9 @@ from scipy.spatial.transform import Rotation
 
 from dgmm.tables import read_csv
 from tests.test_recording import read_mcap, read_rrd
-from tests.workflow import RERUN, TEST_CONFIG, snakemake_command
+from tests.workflow import RERUN, TEST_CONFIG, run_snakemake
 
-CONFIG = TEST_CONFIG
-REG = CONFIG["registration"]
+REG = TEST_CONFIG["registration"]
 COLUMNS = ["model", "mesh", "method", "trial", "rotation_error_deg", "translation_error_pct", "iterations",
            "converged"]
 pytestmark = pytest.mark.slow
@@ -29,7 +28,7 @@ pytestmark = pytest.mark.slow
 def workdir(tmp_path_factory):
     """Working directory of one `snakemake registration` on the tiny config."""
     workdir = tmp_path_factory.mktemp("registration")
-    run = subprocess.run(snakemake_command(workdir, "registration"), capture_output=True, text=True, timeout=900)
+    run = run_snakemake(workdir, "registration")
     assert run.returncode == 0, run.stderr[-3000:]
     return workdir
 
@@ -197,7 +196,7 @@ def test_rerun_chunk_gives_the_same_table_bytes(workdir, tmp_path):
     shutil.rmtree(chunk)
     table = Path("results") / "tables" / "registration.csv"
     (copy / table).unlink()
-    run = subprocess.run(snakemake_command(copy, "registration"), capture_output=True, text=True, timeout=600)
+    run = run_snakemake(copy, "registration", timeout=600)
     assert run.returncode == 0, run.stderr[-3000:]
     assert (chunk / "errors.csv").is_file()
     assert (copy / table).read_bytes() == (workdir / table).read_bytes()
