@@ -4,14 +4,15 @@ Drawn headless: a :class:`matplotlib.figure.Figure` built without pyplot (Agg ca
 :func:`save_png` writes it with no software or time metadata, so the same trajectories give the same bytes.
 Positions are in metres, in the ground truth's world frame, which is z-up for TUM's motion capture and for
 ``dgmm.synthetic``: the top-down view is the x–y plane, with equal axes. Each estimate is first moved onto the
-ground truth by the rigid alignment of its ATE (``dgmm.odometry.absolute_trajectory_error``), as TUM's and evo's
+ground truth by the rigid alignment of its ATE (``dgmm.trajectory_metrics.absolute_trajectory_error``), as TUM's and evo's
 trajectory plots do.
 """
 from matplotlib.figure import Figure
 
 from dgmm.errors import InputError
 from dgmm.files import atomic_path
-from dgmm.odometry import MAX_TIME_DIFFERENCE, absolute_trajectory_error, read_trajectory
+from dgmm.trajectory_metrics import absolute_trajectory_error
+from dgmm.tum import MAX_TIME_DIFFERENCE, read_trajectory
 
 PLANES = {"xy": (0, 1), "xz": (0, 2), "yz": (1, 2)}
 """Top-down plane name -> the two world axes drawn (horizontal, vertical)."""
@@ -29,10 +30,10 @@ def fig6(groundtruth, estimates, *, plane="xy", sequence=None, max_difference=MA
 
     Parameters
     ----------
-    groundtruth : dgmm.odometry.Trajectory
+    groundtruth : dgmm.tum.Trajectory
         The sequence's ground truth (e.g. ``read_trajectory(folder / "groundtruth.txt")``); only the part spanned
         by the estimates' timestamps is drawn.
-    estimates : dict of str to dgmm.odometry.Trajectory
+    estimates : dict of str to dgmm.tum.Trajectory
         Method name -> estimated trajectory, drawn in this order.
     plane : {"xy", "xz", "yz"}, default="xy"
         World axes of the top-down view (z-up worlds: "xy").

@@ -1,7 +1,7 @@
 """A synthetic TUM RGB-D sequence: ray-cast depth of a small room along a hand-held-like camera path.
 
 Stands in for TUM fr3/long_office_household (paper §V) where the real sequence is absent, in exactly its
-format (see ``dgmm.odometry``): ``depth.txt``, ``depth/<timestamp>.png`` (16-bit, metres × 5000, 640×480) and
+format (see ``dgmm.tum``): ``depth.txt``, ``depth/<timestamp>.png`` (16-bit, metres × 5000, 640×480) and
 ``groundtruth.txt`` at 100 Hz like TUM's motion capture. No RGB images and no ``rgb.txt`` are written; nothing in
 dgmm reads them.
 
@@ -36,7 +36,8 @@ import trimesh
 from scipy.spatial.transform import Rotation
 
 from dgmm.errors import InputError
-from dgmm.odometry import FR3, PIXEL_STEP, Trajectory, read_sequence, write_depth, write_trajectory
+from dgmm.pixels import FR3, PIXEL_STEP
+from dgmm.tum import Trajectory, read_sequence, write_depth, write_trajectory
 
 TUM_EPOCH = 1341847980.0
 """First timestamp of the sequence (s), of the magnitude of fr3's Unix times, so parsing precision is exercised."""

@@ -13,7 +13,8 @@ import yaml
 from PIL import Image
 
 from dgmm.errors import DataError
-from dgmm.odometry import first_frames, read_sequence, seconds_summary
+from dgmm.odometry import first_frames, seconds_summary
+from dgmm.tum import read_sequence
 from dgmm.tables import read_csv
 from tests.test_recording import read_mcap, read_rrd
 from tests.workflow import RERUN, TEST_CONFIG, TEST_CONFIG_FILE, run_snakemake

@@ -4,8 +4,10 @@ import sys
 
 from threadpoolctl import threadpool_limits
 
-from dgmm.odometry import (FR3, absolute_trajectory_error, first_frames, frame_seconds, read_sequence, run_odometry,
-                           write_trajectory)
+from dgmm.odometry import first_frames, frame_seconds, run_odometry
+from dgmm.pixels import FR3
+from dgmm.trajectory_metrics import absolute_trajectory_error
+from dgmm.tum import read_sequence, write_trajectory
 from dgmm.recording import OdometryRecorder
 from dgmm.sweep import job_seed
 from dgmm.tables import write_csv
