@@ -11,6 +11,10 @@ second moment, so both become one GEMM each over a (n_prims, 11) table of moment
   ``Sigma_i = Σ_p w_ip E_p[x xᵀ] / W_i − mu_i mu_iᵀ + reg_covar I`` (eqs. 12, 13).
 * Bound: ``Σ_p alpha_p logsumexp_i(log rho_ip) / Σ_p alpha_p`` (eq. 11); the mean log-likelihood for points.
 
+The M-step needs of the responsibilities only ``respᵀ · moments`` (n_components, 10), so each iteration streams
+over blocks of primitives (``dgmm.em_blocks``): memory is O(n_prims × 11 + block × n_components), and blocks
+may run on several threads without changing a bit of the result.
+
 Read top to bottom: variants and checks, moment features, E-step, M-step, initialisation, estimator.
 Conventions follow ``sklearn.mixture.GaussianMixture`` (full covariances): ``precisions_cholesky_`` is upper
 triangular ``U`` with precision ``U Uᵀ``; ``reg_covar`` on the diagonal; ``10 eps`` on component masses.
@@ -23,6 +27,7 @@ import numpy as np
 from sklearn.base import BaseEstimator
 from sklearn.cluster import KMeans
 
+from dgmm.em_blocks import DEFAULT_MEMORY_LIMIT, BlockPass
 from dgmm.errors import FitError, InputError
 from dgmm.primitives import Primitives, as_primitives
 
@@ -32,6 +37,7 @@ _EPS = 10.0 * np.finfo(np.float64).eps
 _ROWS = np.array([0, 1, 2, 0, 0, 1])
 _COLS = np.array([0, 1, 2, 1, 2, 2])
 _SCORE_CHUNK = 1 << 16  # rows per block when scoring, to bound memory at n_rows × n_components
+_KMEANS_SAMPLE = 1 << 17  # k-means initialisation runs on at most this many primitives (a random subsample)
 # Floor for log rho − max before exp. exp(−300) ≈ 5e−131 vanishes beside the row's largest term (1) exactly as
 # 0 would, but keeps exp off its slow underflow path and keeps responsibility × moment products in the M-step
 # GEMM from becoming subnormal (each ≈10× slower per element).
@@ -73,6 +79,8 @@ _PARAMETERS = {
     "reg_covar": (_is_real(0), "a finite number >= 0"),
     "variant": (lambda v: v in VARIANTS, f"one of {tuple(VARIANTS)}"),
     "callback": (lambda v: v is None or callable(v), "None or a callable(iteration, model)"),
+    "memory_limit": (_is_real(1), "a number of bytes >= 1"),
+    "n_jobs": (lambda v: v is None or (_is_int(-(1 << 30))(v) and v != 0), "None or a nonzero integer"),
 }
 
 
@@ -151,21 +159,26 @@ def _normalise_in_place(log_rho):
     return peak + np.log(total)
 
 
-def _e_step(features, params, mstep_weights, out):
-    """Responsibilities (n_prims, n_components), in ``out``, and the bound: the size-weighted mean of the
-    log-normalisers."""
-    resp = _log_rho(features, params, out)
-    log_norm = _normalise_in_place(resp)
-    return resp, np.dot(mstep_weights, log_norm) / mstep_weights.sum()
+def _e_step_block(table, scale, coefficients, rows, out):
+    """Responsibilities of the primitives ``rows`` (in ``out``) and their log-normalisers.
 
-
-def _m_step(resp, weighted_moments, reg_covar):
-    """Mixture parameters (weights, centred means, precision Choleskys, covariances) from responsibilities.
-
-    ``weighted_moments`` is the unscaled moment table (columns 0–9) times each primitive's M-step weight, so
-    one product gives every component's mass, first and second moment (eqs. 12, 13).
+    ``table`` is the unscaled moment table; its columns 0–9 are multiplied by the E-step ``scale`` here.
     """
-    sums = resp.T @ weighted_moments
+    features = table[rows].copy()
+    features[:, :10] *= scale[rows, None]
+    resp = np.dot(features, coefficients.T, out=out)
+    return resp, _normalise_in_place(resp)
+
+
+def _m_step_sums(resp, table, mstep_weights, rows):
+    """``respᵀ ·`` (moment table columns 0–9 × M-step weight) over the primitives ``rows``: every component's
+    mass, first and second moment sums (eqs. 12, 13), shape (n_components, 10)."""
+    return resp.T @ (table[rows, :10] * mstep_weights[rows, None])
+
+
+def _m_step(sums, reg_covar):
+    """Mixture parameters (weights, centred means, precision Choleskys, covariances) from the M-step sums
+    (:func:`_m_step_sums` added over all primitives)."""
     mass = sums[:, 9] + _EPS
     means = sums[:, 6:9] / mass[:, None]
     second = np.empty((len(mass), 3, 3))
@@ -195,20 +208,36 @@ def _precisions_cholesky(covariances):
 # ---------------------------------------------------------------------------------------------------------
 
 def _kmeans_resp(means, weights, n_components, rng):
-    """Hard responsibilities from k-means on the primitive means, weighted by size."""
+    """Hard responsibilities from k-means on the primitive means, weighted by size.
+
+    Above :data:`_KMEANS_SAMPLE` primitives, k-means runs on a uniform random subsample of that many (still
+    weighted by size, so it estimates the same weighted objective) and every primitive takes the label of its
+    nearest centre: time and memory of the initialisation stay bounded whatever the input size.
+    """
     seed = int(rng.integers(np.iinfo(np.int32).max))
-    labels = KMeans(n_clusters=n_components, n_init=1, random_state=seed).fit(means, sample_weight=weights).labels_
-    resp = np.zeros((len(means), n_components))
-    resp[np.arange(len(means)), labels] = 1.0
-    return resp
+    kmeans = KMeans(n_clusters=n_components, n_init=1, random_state=seed)
+    if len(means) <= _KMEANS_SAMPLE:
+        labels = kmeans.fit(means, sample_weight=weights).labels_
+    else:
+        sample = np.sort(rng.choice(len(means), _KMEANS_SAMPLE, replace=False))
+        labels = kmeans.fit(means[sample], sample_weight=weights[sample]).predict(means)
+
+    def block(rows, out):
+        out.fill(0.0)
+        out[np.arange(len(out)), labels[rows]] = 1.0
+        return out
+    return block
 
 
 def _random_resp(means, weights, n_components, rng):
-    """Uniform random soft responsibilities, normalised per primitive."""
-    resp = rng.uniform(size=(len(means), n_components))
-    return resp / resp.sum(axis=1, keepdims=True)
+    """Uniform random soft responsibilities, normalised per primitive (drawn block after block)."""
+    def block(rows, out):
+        resp = rng.uniform(size=out.shape)
+        return np.divide(resp, resp.sum(axis=1, keepdims=True), out=out)
+    return block
 
 
+# init -> function(means, weights, n_components, rng) -> block(rows, out) -> responsibilities of rows, in out
 _INIT_RESP = {"kmeans": _kmeans_resp, "random": _random_resp}
 
 
@@ -242,6 +271,18 @@ class GaussianMixture(BaseEstimator):
         what makes their mesh fits insensitive to random initialisation. Both are the same for points.
     callback : callable(iteration, model), optional
         Called after every EM iteration with the current parameters set on the model (logging hooks in here).
+    memory_limit : int, default=128 MiB
+        Bytes of working memory per thread. EM streams over blocks of primitives, holding one block's
+        ``(rows, n_components)`` responsibilities per thread instead of all ``(n_prims, n_components)``: the
+        rows per block are ``memory_limit / (8 (n_components + 24))``, at most 131072. Beside the blocks, a fit
+        holds about 12 floats per primitive (plus its input). Blocks depend on nothing else, so the result is
+        the same for any ``n_jobs``; different limits change it only by rounding (about 1e-15 relative), and
+        inputs that fit in one block give exactly the unblocked EM.
+    n_jobs : int or None, default=None
+        Threads running the blocks of each EM iteration (BLAS runs one thread inside each): None is 1, -1
+        every CPU, as in scikit-learn. Inputs of a single block use one thread. The k-means initialisation
+        runs scikit-learn's k-means with its own (OpenMP) threads; above 131072 primitives it runs on a seeded
+        random subsample of that many and labels every primitive by its nearest centre.
 
     Attributes
     ----------
@@ -259,7 +300,7 @@ class GaussianMixture(BaseEstimator):
 
     def __init__(self, n_components=1, *, init="kmeans", max_iter=25, tol=1e-12, reg_covar=1e-6,
                  random_state=None, weights_init=None, means_init=None, precisions_init=None,
-                 variant="textbook", callback=None):
+                 variant="textbook", callback=None, memory_limit=DEFAULT_MEMORY_LIMIT, n_jobs=None):
         self.n_components = n_components
         self.init = init
         self.max_iter = max_iter
@@ -271,6 +312,8 @@ class GaussianMixture(BaseEstimator):
         self.precisions_init = precisions_init
         self.variant = variant
         self.callback = callback
+        self.memory_limit = memory_limit
+        self.n_jobs = n_jobs
 
     @classmethod
     def from_parameters(cls, weights, means, covariances, **params):
@@ -304,13 +347,15 @@ class GaussianMixture(BaseEstimator):
                 f"n_components={self.n_components} is larger than the {n_present} primitives of positive size"
             )
 
-    def _initial_params(self, prims, centre, mstep_weights, weighted_moments, rng):
+    def _initial_params(self, prims, centre, table, mstep_weights, blocks, rng):
         """Starting (weights, centred means, precision Choleskys): from ``init``, replaced by user values."""
         k = self.n_components
         user = (self.weights_init, self.means_init, self.precisions_init)
         if any(value is None for value in user):
             resp = _INIT_RESP[self.init](prims.means, mstep_weights, k, rng)
-            weights, means, prec_chol, _ = _m_step(resp, weighted_moments, self.reg_covar)
+            sums = blocks.run(lambda rows, out: _m_step_sums(resp(rows, out), table, mstep_weights, rows),
+                              threads=False)
+            weights, means, prec_chol, _ = _m_step(sums, self.reg_covar)
         if self.weights_init is not None:
             weights = _check_array("weights_init", self.weights_init, (k,))
             if np.any(weights < 0) or not np.isclose(weights.sum(), 1.0):
@@ -348,27 +393,38 @@ class GaussianMixture(BaseEstimator):
         self._check_parameters(prims)
         scale, mstep_weights = VARIANTS[self.variant](prims.weights)
         centre = np.average(prims.means, axis=0, weights=mstep_weights)
-        features = _moment_features(prims.means, prims.covariances, centre, 1.0)
-        weighted_moments = features[:, :10] * mstep_weights[:, None]
-        features[:, :10] *= scale[:, None]
+        table = _moment_features(prims.means, prims.covariances, centre, 1.0)
         rng = np.random.default_rng(self.random_state)
+        log_norm = np.empty(len(prims))
 
-        weights, means, prec_chol = self._initial_params(prims, centre, mstep_weights, weighted_moments, rng)
-        resp = np.empty((len(prims), self.n_components))
-        resp, bound = _e_step(features, (weights, means, prec_chol), mstep_weights, out=resp)
-        self.history_, self.converged_ = [], False
-        for iteration in range(1, self.max_iter + 1):
-            previous = bound
-            params = _m_step(resp, weighted_moments, self.reg_covar)
-            resp, bound = _e_step(features, params[:3], mstep_weights, out=resp)
-            self._store(params, centre)
-            self.history_.append(float(bound))
-            self.n_iter_ = iteration
-            if self.callback is not None:
-                self.callback(iteration, self)
-            if abs(bound - previous) < self.tol:
-                self.converged_ = True
-                break
+        def e_step(params, blocks):
+            """E-step block by block: the M-step sums of its responsibilities and the bound (size-weighted
+            mean of the log-normalisers)."""
+            coefficients = _component_coefficients(*params)
+
+            def block(rows, out):
+                resp, log_norm[rows] = _e_step_block(table, scale, coefficients, rows, out)
+                return _m_step_sums(resp, table, mstep_weights, rows)
+            sums = blocks.run(block)
+            return sums, np.dot(mstep_weights, log_norm) / mstep_weights.sum()
+
+        with BlockPass(len(prims), self.n_components, self.memory_limit, self.n_jobs) as blocks:
+            params = self._initial_params(prims, centre, table, mstep_weights, blocks, rng)
+            del prims  # the loop needs only the moment table (the caller may still hold the input)
+            sums, bound = e_step(params, blocks)
+            self.history_, self.converged_ = [], False
+            for iteration in range(1, self.max_iter + 1):
+                previous = bound
+                params = _m_step(sums, self.reg_covar)
+                sums, bound = e_step(params[:3], blocks)
+                self._store(params, centre)
+                self.history_.append(float(bound))
+                self.n_iter_ = iteration
+                if self.callback is not None:
+                    self.callback(iteration, self)
+                if abs(bound - previous) < self.tol:
+                    self.converged_ = True
+                    break
         self.lower_bound_ = float(bound)
         return self
 

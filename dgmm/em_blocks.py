@@ -1,0 +1,107 @@
+"""Row blocks for EM over many primitives: bounded memory, several threads, sums in a fixed order.
+
+Of the ``(n_prims, n_components)`` responsibilities an EM iteration needs only their product with the moment
+table, ``respᵀ · moments`` of shape ``(n_components, 10)``, and each primitive's log-normaliser.
+:class:`BlockPass` computes such products block by block of rows, so memory holds one
+``(rows, n_components)`` block per thread, never the whole matrix.
+
+Blocks depend only on ``n_components`` and the memory limit, and their partial sums are added in block order,
+so the thread count never changes a bit of the result. An input whose responsibilities fit in one block is
+computed exactly as without blocks (every fit of the paper sweep does).
+"""
+from __future__ import annotations
+
+import os
+import threading
+from concurrent.futures import ThreadPoolExecutor
+from contextlib import ExitStack
+
+import numpy as np
+
+DEFAULT_MEMORY_LIMIT = 128 * 2**20
+"""Bytes of working memory per thread (one block of responsibilities and its row features)."""
+MAX_BLOCK_ROWS = 2**17
+"""Rows per block at most, so that large inputs split into enough blocks to share between threads."""
+_ROW_FLOATS = 24  # float64 per row beside the responsibilities: E-step features, weighted moments, row sums
+
+_controller = None
+
+
+def _blas_controller():
+    """A threadpoolctl controller, made once: ``controller.limit`` is then cheap enough to use per fit."""
+    global _controller
+    if _controller is None:
+        from threadpoolctl import ThreadpoolController
+        _controller = ThreadpoolController()
+    return _controller
+
+
+def block_rows(n_components, memory_limit):
+    """Rows per block: as many as ``memory_limit`` bytes hold, at least 1, at most :data:`MAX_BLOCK_ROWS`."""
+    return int(min(MAX_BLOCK_ROWS, max(1, memory_limit // (8 * (n_components + _ROW_FLOATS)))))
+
+
+def n_threads(n_jobs):
+    """Threads for scikit-learn's ``n_jobs``: None is 1, -1 every CPU, -2 all but one, ..."""
+    if n_jobs is None:
+        return 1
+    if n_jobs < 0:
+        return max(1, (os.cpu_count() or 1) + 1 + n_jobs)
+    return n_jobs
+
+
+class BlockPass:
+    """Runs a function over the row blocks of an input on ``n_jobs`` threads and sums its results in block order.
+
+    Use as a context manager: inside it BLAS runs one thread per caller (the threads here are the parallelism),
+    and ``run`` may be called once per EM iteration, reusing each thread's block buffer.
+
+    Parameters
+    ----------
+    n_rows, n_components : int
+    memory_limit : int
+        Bytes of working memory per thread; see :func:`block_rows`.
+    n_jobs : int or None
+        Threads, as scikit-learn's ``n_jobs``.
+    """
+
+    def __init__(self, n_rows, n_components, memory_limit, n_jobs):
+        rows = block_rows(n_components, memory_limit)
+        self.blocks = [slice(start, min(start + rows, n_rows)) for start in range(0, n_rows, rows)]
+        self._shape = (min(rows, n_rows), n_components)
+        self._threads = min(n_threads(n_jobs), len(self.blocks))
+        self._local = threading.local()
+        self._executor = None
+
+    def __enter__(self):
+        self._stack = ExitStack()
+        self._stack.enter_context(_blas_controller().limit(limits=1, user_api="blas"))
+        if self._threads > 1:
+            self._executor = self._stack.enter_context(ThreadPoolExecutor(self._threads))
+        return self
+
+    def __exit__(self, *exc_info):
+        self._executor = None
+        return self._stack.__exit__(*exc_info)
+
+    def _buffer(self, rows):
+        """This thread's (rows, n_components) block buffer, allocated once (fresh pages cost as much as the
+        products written into them)."""
+        buffer = getattr(self._local, "buffer", None)
+        if buffer is None:
+            buffer = self._local.buffer = np.empty(self._shape)
+        return buffer[: rows.stop - rows.start]
+
+    def run(self, function, threads=True):
+        """``Σ_blocks function(rows, out)`` added in block order; ``out`` is a free (n_rows_in_block,
+        n_components) buffer. ``threads=False`` runs the blocks in order on the calling thread (for functions
+        that draw from a random generator)."""
+        call = lambda rows: function(rows, self._buffer(rows))  # noqa: E731
+        if threads and self._executor is not None:
+            parts = self._executor.map(call, self.blocks)
+        else:
+            parts = map(call, self.blocks)
+        total = None
+        for part in parts:
+            total = part if total is None else total + part
+        return total
