@@ -12,6 +12,8 @@ from sklearn.mixture import GaussianMixture
 
 from dgmm import InputError
 from dgmm import registration as reg
+from dgmm.registration import d2d, p2d, pose
+from dgmm.registration.fitted import FittedMixture
 
 BUNNY = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "stanford" / "bunny_res4.ply"
 
@@ -151,20 +153,20 @@ def test_p2d_cost_is_sklearn_negative_mean_log_likelihood():
     points = rng.normal(size=(200, 3)) * [1.0, 2.0, 0.5]
     mixture = GaussianMixture(5, random_state=0).fit(points)
     params = _random_params(rng)
-    rotation, translation = reg._pose_from_params(params, points.mean(axis=0))
-    cost = reg._p2d_cost(params, points, points.mean(axis=0), reg._Mixture.from_fitted("m", mixture), False)
+    rotation, translation = pose.pose_from_params(params, points.mean(axis=0))
+    cost = p2d.p2d_cost(params, points, points.mean(axis=0), FittedMixture.from_fitted("m", mixture), False)
     assert cost == pytest.approx(-mixture.score(points @ rotation.T + translation), rel=1e-12)
 
 
 @pytest.mark.parametrize("seed", range(5))
 def test_p2d_gradient_matches_central_differences(seed):
     rng = np.random.default_rng(seed)
-    mixture = reg._Mixture.from_fitted("m", _random_mixture(rng, 7))
+    mixture = FittedMixture.from_fitted("m", _random_mixture(rng, 7))
     points = 2 * rng.normal(size=(40, 3))
     centre = points.mean(axis=0)
     params = _random_params(rng)
-    _, gradient = reg._p2d_cost(params, points, centre, mixture, True)
-    numeric = _central_differences(lambda x: reg._p2d_cost(x, points, centre, mixture, False), params, 1e-6)
+    _, gradient = p2d.p2d_cost(params, points, centre, mixture, True)
+    numeric = _central_differences(lambda x: p2d.p2d_cost(x, points, centre, mixture, False), params, 1e-6)
     np.testing.assert_allclose(gradient, numeric, rtol=0, atol=1e-7 * np.linalg.norm(numeric))
 
 
@@ -172,15 +174,15 @@ def test_d2d_cost_matches_a_per_pair_loop():
     rng = np.random.default_rng(30)
     fixed, moving = _random_mixture(rng, 4), _random_mixture(rng, 3)
     params = _random_params(rng)
-    centre = reg._Mixture.from_fitted("moving", moving).centroid
-    rotation, translation = reg._pose_from_params(params, centre)
+    centre = FittedMixture.from_fitted("moving", moving).centroid
+    rotation, translation = pose.pose_from_params(params, centre)
     expected = 0.0
     for i in range(4):
         for j in range(3):
             y = fixed.means_[i] - translation - rotation @ moving.means_[j]
             s = fixed.covariances_[i] + rotation @ moving.covariances_[j] @ rotation.T
             expected -= fixed.weights_[i] * moving.weights_[j] * np.exp(-0.5 * y @ np.linalg.inv(s) @ y)
-    cost = reg._d2d_cost(params, reg._Mixture.from_fitted("f", fixed), reg._Mixture.from_fitted("m", moving),
+    cost = d2d.d2d_cost(params, FittedMixture.from_fitted("f", fixed), FittedMixture.from_fitted("m", moving),
                          centre, False)
     assert cost == pytest.approx(expected, rel=1e-12)
 
@@ -188,11 +190,11 @@ def test_d2d_cost_matches_a_per_pair_loop():
 @pytest.mark.parametrize("seed", range(5))
 def test_d2d_gradient_matches_central_differences(seed):
     rng = np.random.default_rng(100 + seed)
-    fixed = reg._Mixture.from_fitted("f", _random_mixture(rng, 6))
-    moving = reg._Mixture.from_fitted("m", _random_mixture(rng, 5))
+    fixed = FittedMixture.from_fitted("f", _random_mixture(rng, 6))
+    moving = FittedMixture.from_fitted("m", _random_mixture(rng, 5))
     params = _random_params(rng)
-    _, gradient = reg._d2d_cost(params, fixed, moving, moving.centroid, True)
-    numeric = _central_differences(lambda x: reg._d2d_cost(x, fixed, moving, moving.centroid, False), params, 1e-6)
+    _, gradient = d2d.d2d_cost(params, fixed, moving, moving.centroid, True)
+    numeric = _central_differences(lambda x: d2d.d2d_cost(x, fixed, moving, moving.centroid, False), params, 1e-6)
     np.testing.assert_allclose(gradient, numeric, rtol=0, atol=1e-7 * np.linalg.norm(numeric))
 
 
