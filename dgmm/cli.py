@@ -323,6 +323,88 @@ def _view_arguments(parser):
 
 
 # ---------------------------------------------------------------------------------------------------------
+# odometry
+# ---------------------------------------------------------------------------------------------------------
+
+def _odometry(args):
+    """Frame-to-frame odometry of a TUM folder: the trajectory file, optional recordings, the metrics as JSON."""
+    import tempfile
+
+    from dgmm.odometry import first_frames, run_odometry
+    from dgmm.pixels import parse_intrinsics, sequence_intrinsics
+    from dgmm.recording import OdometryRecorder
+    from dgmm.trajectory_metrics import drift_metrics
+    from dgmm.tum import read_sequence, write_trajectory
+
+    sequence = read_sequence(args.sequence)
+    name = args.sequence.resolve().name
+    try:
+        camera = args.intrinsics or sequence_intrinsics(name)
+    except InputError as exc:
+        raise InputError(f"{exc} with --intrinsics") from None
+    n_frames = len(sequence) if args.frames is None else min(args.frames, len(sequence))
+    if n_frames < 2:
+        raise DataError(f"{args.sequence / 'depth.txt'}: odometry needs at least 2 depth frames, got {n_frames}")
+    frames, groundtruth = (first_frames(sequence, n_frames) if sequence.groundtruth is not None
+                           else (range(n_frames), None))
+    options = dict(intrinsics=parse_intrinsics(camera), variant=args.variant, seed=args.seed,
+                   warm_iter=args.warm_iter or None)
+    params = {"dgmm_version": __version__, "sequence": name, "folder": str(args.sequence), "method": args.method,
+              "frames": n_frames, "intrinsics": camera, "variant": args.variant, "warm_iter": args.warm_iter,
+              "seed": args.seed}
+    with ExitStack() as stack:
+        bar = stack.enter_context(tqdm(total=n_frames, desc="odometry", unit="frame",
+                                       disable=not sys.stderr.isatty(), delay=PROGRESS_DELAY, leave=False))
+        recorder = None
+        if args.mcap is not None or args.rrd is not None:  # the recorder always writes MCAP: a discarded copy
+            mcap = args.mcap or Path(stack.enter_context(tempfile.TemporaryDirectory())) / "odometry.mcap"
+            recorder = stack.enter_context(OdometryRecorder(mcap, args.rrd, params=params, groundtruth=groundtruth,
+                                                            intrinsics=options["intrinsics"]))
+
+        def advance(frame):
+            bar.update()
+            if recorder is not None:
+                recorder(frame)
+        result = run_odometry(sequence, args.method, frames, callback=advance, **options)
+        if recorder is not None:
+            recorder.finish(result.trajectory)
+        metrics = (drift_metrics(result.trajectory, sequence.groundtruth) if groundtruth is not None else
+                   {"ate_rmse_m": None, "rpe_translation_m_s": None, "rpe_rotation_deg_s": None})
+        if args.output is not None:
+            write_trajectory(args.output, result.trajectory,
+                             header=f"dgmm {args.method} odometry of {name}, intrinsics {camera}")
+    seconds = float(result.prepare_seconds.mean() + result.registration_seconds.mean())
+    print(json.dumps({"sequence": name, "method": args.method, "variant": args.variant, "intrinsics": camera,
+                      "frames": n_frames, **metrics, "seconds_per_frame": seconds}))
+
+
+def _odometry_arguments(parser):
+    """Arguments of ``dgmm odometry``."""
+    from dgmm.mixture import VARIANTS as EM_VARIANTS
+
+    parser.add_argument("sequence", type=Path, metavar="SEQUENCE_DIR",
+                        help="TUM RGB-D sequence folder (depth.txt, depth/*.png, optional groundtruth.txt)")
+    parser.add_argument("--method", choices=("gmm-pixels", "gmm-points", "icp"), default="gmm-pixels",
+                        help="GMM of pixel rectangles or of points with D2D registration, or point-to-point ICP on "
+                             "2,500 points (default: %(default)s)")
+    parser.add_argument("--frames", type=_positive_int, metavar="N", help="use the first N depth frames (default: all)")
+    parser.add_argument("--variant", choices=tuple(EM_VARIANTS), default="textbook",
+                        help="EM variant: textbook EM, or the authors' published code (default: %(default)s)")
+    parser.add_argument("--intrinsics", metavar="fr1|fr2|fr3|ros|FX,FY,CX,CY",
+                        help="depth camera (default: from the folder name, rgbd_dataset_freiburgN_*: ros for "
+                             "freiburg 1 and 2, fr3 for freiburg 3)")
+    parser.add_argument("--warm-iter", type=_seed, default=5, metavar="N",
+                        help="EM iterations of every frame after the first, started from the previous frame's "
+                             "mixture; 0 fits every frame from k-means with 25 iterations, the paper's protocol "
+                             "(default: %(default)s)")
+    parser.add_argument("--seed", type=_seed, default=0, metavar="S", help="random seed (default: %(default)s)")
+    parser.add_argument("-o", "--output", type=Path, metavar="TRAJECTORY.txt",
+                        help="write the estimated trajectory (TUM format, depth timestamps) to this file")
+    parser.add_argument("--mcap", type=Path, metavar="F", help="record every frame and the trajectories to MCAP")
+    parser.add_argument("--rrd", type=Path, metavar="F", help="record the run to this rerun recording (.rrd)")
+
+
+# ---------------------------------------------------------------------------------------------------------
 # Parser
 # ---------------------------------------------------------------------------------------------------------
 
@@ -381,6 +463,9 @@ COMMANDS = {
     "sample": Command("draw points from a model into a PLY point cloud",
                       "dgmm sample bunny.npz -n 10000 -o bunny_samples.ply", _sample_arguments, _sample),
     "view": Command("open a rerun recording in the rerun viewer", "dgmm view bunny.rrd", _view_arguments, _view),
+    "odometry": Command("frame-to-frame visual odometry of a TUM RGB-D folder; print ATE and RPE as JSON",
+                        "dgmm odometry rgbd_dataset_freiburg1_xyz --frames 100 -o trajectory.txt",
+                        _odometry_arguments, _odometry),
 }
 
 

@@ -143,3 +143,21 @@ def relative_pose_error(estimate, reference, window=RPE_WINDOW_SECONDS, max_diff
     angles = np.degrees(np.arctan2(sine, (np.trace(error_rotation, axis1=1, axis2=2) - 1.0) / 2.0))
     return RelativePoseError(float(np.sqrt(np.mean(np.sum(error_translation ** 2, axis=1)))),
                              float(np.sqrt(np.mean(angles ** 2))), delta, len(i))
+
+
+def drift_metrics(estimate, reference, max_difference=MAX_TIME_DIFFERENCE):
+    """The odometry table's columns: ATE RMSE and the one-second RPE of ``estimate`` against ``reference``.
+
+    Returns
+    -------
+    metrics : dict
+        ``ate_rmse_m``, ``rpe_translation_m_s``, ``rpe_rotation_deg_s``; the RPE entries are None when the paired
+        frames span less than one window.
+    """
+    ate = absolute_trajectory_error(estimate, reference, max_difference)
+    try:
+        rpe = relative_pose_error(estimate, reference, max_difference=max_difference)
+    except InputError:
+        return {"ate_rmse_m": ate.rmse, "rpe_translation_m_s": None, "rpe_rotation_deg_s": None}
+    return {"ate_rmse_m": ate.rmse, "rpe_translation_m_s": rpe.translation_rmse,
+            "rpe_rotation_deg_s": rpe.rotation_rmse_deg}

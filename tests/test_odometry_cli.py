@@ -1,0 +1,111 @@
+"""`dgmm odometry SEQUENCE_DIR` run as a user runs it (a subprocess), on fr1/xyz's files and on broken folders.
+
+References are independent of the code under test: evo's APE and RPE of the written trajectory file against
+TUM's groundtruth.txt, numpy's reading of the TUM files, Pillow for the broken PNGs.
+"""
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from tests.test_odometry_metrics import FR1_XYZ, needs_fr1
+
+DGMM = Path(sys.executable).with_name("dgmm")
+
+
+def dgmm_odometry(*args):
+    return subprocess.run([str(DGMM), "odometry", *map(str, args)], capture_output=True, text=True, timeout=600)
+
+
+@needs_fr1
+def test_fr1_xyz_trajectory_and_metrics_equal_evo(tmp_path):
+    from evo.core import metrics, sync
+    from evo.tools import file_interface
+
+    output = tmp_path / "t.txt"
+    run = dgmm_odometry(FR1_XYZ, "--method", "icp", "--frames", 40, "-o", output, "--mcap", tmp_path / "o.mcap")
+    assert run.returncode == 0, run.stderr
+    result = json.loads(run.stdout)
+    assert (result["sequence"], result["method"], result["frames"], result["intrinsics"]) == (
+        "rgbd_dataset_freiburg1_xyz", "icp", 40, "ros")
+    assert result["seconds_per_frame"] > 0 and (tmp_path / "o.mcap").stat().st_size > 0
+    rows = np.loadtxt(output, comments="#")
+    listed = np.loadtxt(FR1_XYZ / "depth.txt", comments="#", usecols=0)
+    np.testing.assert_allclose(rows[:, 0], listed[:40], rtol=0, atol=1e-6)  # one pose per depth frame used
+    np.testing.assert_array_equal(rows[0, 1:], [0, 0, 0, 0, 0, 0, 1])
+
+    ref, est = sync.associate_trajectories(file_interface.read_tum_trajectory_file(FR1_XYZ / "groundtruth.txt"),
+                                           file_interface.read_tum_trajectory_file(output), max_diff=0.02)
+    rpe = metrics.RPE(metrics.PoseRelation.translation_part, delta=30, delta_unit=metrics.Unit.frames,
+                      all_pairs=True)
+    rpe.process_data((ref, est))
+    est.align(ref, correct_scale=False)
+    ape = metrics.APE(metrics.PoseRelation.translation_part)
+    ape.process_data((ref, est))
+    assert result["ate_rmse_m"] == pytest.approx(ape.get_statistic(metrics.StatisticsType.rmse), rel=1e-6)
+    assert result["rpe_translation_m_s"] == pytest.approx(rpe.get_statistic(metrics.StatisticsType.rmse), rel=1e-6)
+    assert result["ate_rmse_m"] < 0.05 and 0 < result["rpe_rotation_deg_s"] < 10
+
+
+def small_sequence(folder, n_frames=3, shape=(480, 640), groundtruth=True):
+    """A TUM folder of flat-wall depth frames at 30 Hz, with identity ground truth at 100 Hz when asked."""
+    (folder / "depth").mkdir(parents=True)
+    stamps = 100 + np.arange(n_frames) / 30
+    (folder / "depth.txt").write_text("# depth\n" + "".join(f"{s:.6f} depth/{k}.png\n" for k, s in enumerate(stamps)))
+    for k in range(n_frames):
+        Image.fromarray(np.full(shape, 10000, dtype=np.uint16)).save(folder / "depth" / f"{k}.png")
+    if groundtruth:
+        truth = 100 + np.arange(100 * n_frames // 30 + 2) / 100
+        (folder / "groundtruth.txt").write_text("".join(f"{s:.4f} 0 0 0 0 0 0 1\n" for s in truth))
+    return folder
+
+
+def no_listing(folder):
+    small_sequence(folder)
+    (folder / "depth.txt").unlink()
+
+
+def unreadable_png(folder):
+    small_sequence(folder)
+    (folder / "depth" / "1.png").write_bytes(b"not a png")
+
+
+def wrong_size(folder):
+    small_sequence(folder, shape=(240, 320))
+
+
+def one_frame(folder):
+    small_sequence(folder, n_frames=1)
+
+
+def groundtruth_elsewhere(folder):
+    small_sequence(folder)
+    (folder / "groundtruth.txt").write_text("5.0 0 0 0 0 0 0 1\n5.01 0 0 0 0 0 0 1\n5.02 0 0 0 0 0 0 1\n")
+
+
+@pytest.mark.parametrize("breakage, message", [(no_listing, "depth.txt"), (unreadable_png, "1.png"),
+                                               (wrong_size, "0.png: 320x240 image"), (one_frame, "at least 2"),
+                                               (groundtruth_elsewhere, "groundtruth.txt")])
+def test_bad_input_is_one_line_exit_2_and_no_trajectory(tmp_path, breakage, message):
+    folder = tmp_path / "rgbd_dataset_freiburg3_broken"
+    breakage(folder)
+    output = tmp_path / "t.txt"
+    run = dgmm_odometry(folder, "--method", "icp", "-o", output, "--rrd", tmp_path / "o.rrd")
+    assert run.returncode == 2, run.stderr
+    assert run.stdout == "" and run.stderr.count("\n") == 1 and message in run.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == [folder.name]  # no trajectory, no recording
+
+
+def test_camera_from_the_name_or_the_option(tmp_path):
+    folder = small_sequence(tmp_path / "my_room", groundtruth=False)
+    run = dgmm_odometry(folder, "--method", "icp")
+    assert run.returncode == 2 and "--intrinsics" in run.stderr and "my_room" in run.stderr
+    run = dgmm_odometry(folder, "--method", "icp", "--intrinsics", "525,525,319.5,239.5", "-o", tmp_path / "t.txt")
+    assert run.returncode == 0, run.stderr
+    result = json.loads(run.stdout)
+    assert result["frames"] == 3 and result["ate_rmse_m"] is None and result["rpe_rotation_deg_s"] is None
+    assert len(np.loadtxt(tmp_path / "t.txt", comments="#")) == 3
