@@ -17,7 +17,15 @@ may run on several threads without changing a bit of the result.
 
 Read top to bottom: variants and checks, moment features, E-step, M-step, initialisation, estimator.
 Conventions follow ``sklearn.mixture.GaussianMixture`` (full covariances): ``precisions_cholesky_`` is upper
-triangular ``U`` with precision ``U Uᵀ``; ``reg_covar`` on the diagonal; ``10 eps`` on component masses.
+triangular ``U`` with precision ``U Uᵀ``; ``reg_covar`` on the diagonal, absolute, in the data's squared units;
+``10 eps`` on component masses.
+
+Units do not matter: EM and scoring run on coordinates centred and divided by a ``unit``, the power of two
+nearest below the RMS radius of the primitives (of the mixture, when scoring), with ``reg_covar / unit²``.
+Multiplying by a power of two is exact, so the internal numbers are the data-unit numbers scaled exactly
+(bit-identical results wherever data-unit arithmetic did not overflow), and the log-determinant is taken of the
+data-unit precision so that ``log rho`` is the data-unit one. A fit either returns finite parameters or raises
+(InputError for data or parameters, FitError naming the EM iteration).
 """
 from __future__ import annotations
 
@@ -42,6 +50,9 @@ _KMEANS_SAMPLE = 1 << 17  # k-means initialisation runs on at most this many pri
 # 0 would, but keeps exp off its slow underflow path and keeps responsibility × moment products in the M-step
 # GEMM from becoming subnormal (each ≈10× slower per element).
 _LOG_FLOOR = -300.0
+# RMS radius of the primitives about their centre that a fit accepts: beyond, covariances in squared data units
+# are not normal float64 numbers (1e-152² = 1e-304; 1e152² = 1e304, max 1.8e308).
+_RADIUS_RANGE = (1e-152, 1e152)
 
 
 def _textbook(sizes):
@@ -84,6 +95,16 @@ _PARAMETERS = {
 }
 
 
+_FITTED = ("weights_", "means_", "precisions_cholesky_", "covariances_")
+
+
+def _check_bound(bound):
+    """FitError unless the EM bound is finite."""
+    if not np.isfinite(bound):
+        raise FitError(f"the bound is {bound}: a component collapsed or the primitives lie too far apart for "
+                       f"float64; increase reg_covar or reduce n_components")
+
+
 def _check_array(name, value, shape):
     """``value`` as a finite float64 array of ``shape``, or an InputError naming it."""
     array = np.asarray(value, dtype=np.float64)
@@ -94,19 +115,47 @@ def _check_array(name, value, shape):
     return array
 
 
+def _unit(deviations, covariances, weights):
+    """The power of two at or below the RMS radius ``sqrt(mean_p(|mu_p − c|² + tr Sigma_p))``, and the radius.
+
+    Parameters
+    ----------
+    deviations : ndarray of shape (n, 3)
+        Means minus their centre ``c``.
+    covariances : ndarray of shape (n, 3, 3)
+    weights : ndarray of shape (n,)
+
+    Returns
+    -------
+    unit : float
+        ``2**e`` with ``radius / 2 < unit <= radius``; 1 when the radius is 0 (every primitive one point).
+    radius : float
+    """
+    spreads = np.abs(np.diagonal(covariances, axis1=1, axis2=2)).max()
+    peak = max(np.abs(deviations).max(), np.sqrt(spreads))
+    if peak == 0:
+        return 1.0, 0.0
+    _, exponent = np.frexp(peak)  # squares of values scaled by 2**-exponent neither overflow nor underflow
+    squares = (np.ldexp(deviations, -exponent) ** 2).sum(axis=1)
+    squares += np.trace(np.ldexp(covariances, -2 * exponent), axis1=1, axis2=2)
+    radius = np.ldexp(np.sqrt(np.average(squares, weights=weights)), exponent)
+    return np.ldexp(1.0, np.frexp(radius)[1] - 1), radius
+
+
 # ---------------------------------------------------------------------------------------------------------
 # Moment features: one row per primitive, so that E- and M-step are single matrix products.
 # ---------------------------------------------------------------------------------------------------------
 
-def _moment_features(means, covariances, centre, scale):
+def _moment_features(means, covariances, centre, scale, unit=1.0):
     """Feature table ``(n_prims, 11)`` of the centred moments of primitives given by means and covariances.
 
     Columns 0–5 hold the upper triangle of ``E[x xᵀ]`` (off-diagonals doubled), 6–8 the mean, 9 a one; all
     ten multiplied by the E-step ``scale``. Column 10 is an unscaled one that carries the per-component
-    constant. Then ``features @ _component_coefficients(...)ᵀ`` is ``log rho``.
+    constant. Then ``features @ _component_coefficients(...)ᵀ`` is ``log rho``. Moments are of
+    ``(x − centre) / unit``, computed without forming the data-unit second moments (which overflow at 1e155).
     """
-    means = means - centre
-    second = covariances + means[:, :, None] * means[:, None, :]
+    means = (means - centre) / unit
+    second = covariances / unit**2 + means[:, :, None] * means[:, None, :]
     features = np.empty((len(means), 11))
     features[:, :6] = second[:, _ROWS, _COLS]
     features[:, 3:6] *= 2.0
@@ -117,15 +166,16 @@ def _moment_features(means, covariances, centre, scale):
     return features
 
 
-def _component_coefficients(weights, means, precisions_cholesky):
+def _component_coefficients(weights, means, precisions_cholesky, unit=1.0):
     """Coefficients ``(n_components, 11)`` such that features · coefficients = log rho (E-step).
 
     ``−½ E_p[(x−mu_i)ᵀ Λ_i (x−mu_i)] = −½ (<Λ_i, E_p[x xᵀ]> − 2 mu_iᵀ Λ_i mu_p + mu_iᵀ Λ_i mu_i)``, plus
-    ``log lambda_i − 3/2 log 2π + ½ log det Λ_i`` on the constant column.
+    ``log lambda_i − 3/2 log 2π + ½ log det Λ_i`` on the constant column. Parameters are in internal units
+    (data / ``unit``); the log-determinant is the data-unit one, so that ``log rho`` is a data-unit density.
     """
     precisions = precisions_cholesky @ np.swapaxes(precisions_cholesky, 1, 2)
     precision_means = np.einsum("kij,kj->ki", precisions, means)
-    log_det = np.log(np.diagonal(precisions_cholesky, axis1=1, axis2=2)).sum(axis=1)
+    log_det = np.log(np.diagonal(precisions_cholesky, axis1=1, axis2=2) / unit).sum(axis=1)
     coefficients = np.empty((len(weights), 11))
     coefficients[:, :6] = -0.5 * precisions[:, _ROWS, _COLS]
     coefficients[:, 6:9] = precision_means
@@ -139,13 +189,13 @@ def _component_coefficients(weights, means, precisions_cholesky):
 # E-step, M-step
 # ---------------------------------------------------------------------------------------------------------
 
-def _log_rho(features, params, out=None):
+def _log_rho(features, params, out=None, unit=1.0):
     """Weighted log-probabilities ``log rho`` of shape (n_rows, n_components), written to ``out`` if given.
 
     Reusing one ``out`` buffer across EM iterations avoids re-faulting a fresh (n_prims, n_components) array
     every iteration, which costs as much as the product itself.
     """
-    return np.dot(features, _component_coefficients(*params).T, out=out)
+    return np.dot(features, _component_coefficients(*params, unit=unit).T, out=out)
 
 
 def _normalise_in_place(log_rho):
@@ -194,13 +244,18 @@ def _m_step(sums, reg_covar):
 def _precisions_cholesky(covariances):
     """Upper-triangular ``U`` with ``U Uᵀ = Σ⁻¹`` for each component (scikit-learn's convention)."""
     try:
-        lower = np.linalg.cholesky(covariances)
+        lower = np.linalg.cholesky(covariances)  # NaN in, NaN out: checked below
+        precisions_cholesky = np.swapaxes(np.linalg.inv(lower), 1, 2)
+        failed = not np.all(np.isfinite(precisions_cholesky))
     except np.linalg.LinAlgError:
+        failed = True
+    if failed:
+        bad = [k for k, c in enumerate(covariances) if not np.all(np.isfinite(c)) or np.linalg.eigvalsh(c)[0] <= 0]
         raise FitError(
-            "a component covariance is not positive definite: increase reg_covar, reduce n_components "
-            "or check the input for duplicate or degenerate primitives"
-        ) from None
-    return np.swapaxes(np.linalg.inv(lower), 1, 2)
+            f"component {bad[0] if bad else '?'} collapsed (covariance not positive definite): duplicate or "
+            f"coplanar primitives need reg_covar > 0; or increase reg_covar, or reduce n_components"
+        )
+    return precisions_cholesky
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -258,7 +313,9 @@ class GaussianMixture(BaseEstimator):
     tol : float, default=1e-12
         EM stops when the bound changes by less than ``tol`` between iterations.
     reg_covar : float, default=1e-6
-        Added to the diagonal of every covariance.
+        Added to the diagonal of every covariance: absolute, in the data's squared units, as scikit-learn
+        does (fitting ``s · X`` with ``reg_covar · s²`` gives the mixture of ``X`` scaled by ``s``). Duplicate
+        or coplanar primitives need ``reg_covar > 0``.
     random_state : int, numpy.random.Generator or None, default=None
         Seeds ``np.random.default_rng``; the same seed gives bit-identical fits.
     weights_init : array-like of shape (n_components,), optional
@@ -347,35 +404,51 @@ class GaussianMixture(BaseEstimator):
                 f"n_components={self.n_components} is larger than the {n_present} primitives of positive size"
             )
 
-    def _initial_params(self, prims, centre, table, mstep_weights, blocks, rng):
-        """Starting (weights, centred means, precision Choleskys): from ``init``, replaced by user values."""
+    def _initial_params(self, prims, centre, unit, table, mstep_weights, blocks, rng):
+        """Starting (weights, means, precision Choleskys) in internal units: from ``init``, replaced by user
+        values."""
         k = self.n_components
         user = (self.weights_init, self.means_init, self.precisions_init)
         if any(value is None for value in user):
-            resp = _INIT_RESP[self.init](prims.means, mstep_weights, k, rng)
+            resp = _INIT_RESP[self.init](prims.means / unit, mstep_weights, k, rng)
             sums = blocks.run(lambda rows, out: _m_step_sums(resp(rows, out), table, mstep_weights, rows),
                               threads=False)
-            weights, means, prec_chol, _ = _m_step(sums, self.reg_covar)
+            weights, means, prec_chol, _ = _m_step(sums, self.reg_covar / unit**2)
         if self.weights_init is not None:
             weights = _check_array("weights_init", self.weights_init, (k,))
             if np.any(weights < 0) or not np.isclose(weights.sum(), 1.0):
                 raise InputError("weights_init must be non-negative and sum to 1")
         if self.means_init is not None:
-            means = _check_array("means_init", self.means_init, (k, 3)) - centre
+            means = (_check_array("means_init", self.means_init, (k, 3)) - centre) / unit
         if self.precisions_init is not None:
             precisions = _check_array("precisions_init", self.precisions_init, (k, 3, 3))
             try:  # any factor with U Uᵀ = precision serves; scikit-learn takes the lower Cholesky here too
-                prec_chol = np.linalg.cholesky(precisions)
+                prec_chol = np.linalg.cholesky(precisions) * unit
             except np.linalg.LinAlgError:
                 raise InputError("precisions_init must be symmetric positive definite") from None
         return weights, means, prec_chol
 
-    def _store(self, params, centre):
+    def _frame(self, prims, mstep_weights):
+        """Centre and unit of the internal coordinates (module docstring), or an InputError."""
+        centre = np.average(prims.means, axis=0, weights=mstep_weights)
+        unit, radius = _unit(prims.means - centre, prims.covariances, mstep_weights)
+        low, high = _RADIUS_RANGE
+        if radius > 0 and not low <= radius <= high:
+            raise InputError(f"the input's RMS radius about its centre is {radius:.3g}; fits need it in "
+                             f"[{low:.0e}, {high:.0e}] (covariances are squared units): rescale the input")
+        if not np.isfinite(self.reg_covar / unit**2):
+            raise InputError(f"reg_covar={self.reg_covar!r} is too large for an input of RMS radius {radius:.3g}")
+        return centre, unit
+
+    def _store(self, params, centre, unit):
+        """Set the fitted attributes in data units from internal parameters; FitError if any is not finite."""
         weights, means, prec_chol, covariances = params
         self.weights_ = weights
-        self.means_ = means + centre
-        self.precisions_cholesky_ = prec_chol
-        self.covariances_ = covariances
+        self.means_ = means * unit + centre
+        self.precisions_cholesky_ = prec_chol / unit
+        self.covariances_ = covariances * unit**2
+        if not all(np.all(np.isfinite(getattr(self, name))) for name in _FITTED):
+            raise FitError("a fitted parameter is not finite in data units")
 
     def fit(self, X, y=None):
         """Fit the mixture by EM.
@@ -392,15 +465,16 @@ class GaussianMixture(BaseEstimator):
         prims = as_primitives(X)
         self._check_parameters(prims)
         scale, mstep_weights = VARIANTS[self.variant](prims.weights)
-        centre = np.average(prims.means, axis=0, weights=mstep_weights)
-        table = _moment_features(prims.means, prims.covariances, centre, 1.0)
+        centre, unit = self._frame(prims, mstep_weights)
+        table = _moment_features(prims.means, prims.covariances, centre, 1.0, unit)
+        reg_covar = self.reg_covar / unit**2
         rng = np.random.default_rng(self.random_state)
         log_norm = np.empty(len(prims))
 
         def e_step(params, blocks):
             """E-step block by block: the M-step sums of its responsibilities and the bound (size-weighted
             mean of the log-normalisers)."""
-            coefficients = _component_coefficients(*params)
+            coefficients = _component_coefficients(*params, unit=unit)
 
             def block(rows, out):
                 resp, log_norm[rows] = _e_step_block(table, scale, coefficients, rows, out)
@@ -409,15 +483,23 @@ class GaussianMixture(BaseEstimator):
             return sums, np.dot(mstep_weights, log_norm) / mstep_weights.sum()
 
         with BlockPass(len(prims), self.n_components, self.memory_limit, self.n_jobs) as blocks:
-            params = self._initial_params(prims, centre, table, mstep_weights, blocks, rng)
-            del prims  # the loop needs only the moment table (the caller may still hold the input)
-            sums, bound = e_step(params, blocks)
+            try:
+                params = self._initial_params(prims, centre, unit, table, mstep_weights, blocks, rng)
+                del prims  # the loop needs only the moment table (the caller may still hold the input)
+                sums, bound = e_step(params, blocks)
+                _check_bound(bound)
+            except FitError as exc:
+                raise FitError(f"EM initialisation ({self.init}): {exc}") from None
             self.history_, self.converged_ = [], False
             for iteration in range(1, self.max_iter + 1):
                 previous = bound
-                params = _m_step(sums, self.reg_covar)
-                sums, bound = e_step(params[:3], blocks)
-                self._store(params, centre)
+                try:
+                    params = _m_step(sums, reg_covar)
+                    sums, bound = e_step(params[:3], blocks)
+                    _check_bound(bound)
+                    self._store(params, centre, unit)
+                except FitError as exc:
+                    raise FitError(f"EM iteration {iteration}: {exc}") from None
                 self.history_.append(float(bound))
                 self.n_iter_ = iteration
                 if self.callback is not None:
@@ -435,16 +517,23 @@ class GaussianMixture(BaseEstimator):
             raise InputError("this GaussianMixture is not fitted yet: call fit first")
 
     def _log_rho_blocks(self, prims):
-        """``log rho`` of the fitted mixture (textbook E-step), block by block over the primitives."""
+        """``log rho`` of the fitted mixture (textbook E-step), block by block over the primitives, computed in
+        the mixture's own internal units (module docstring)."""
         self._check_fitted()
         centre = self.weights_ @ self.means_
-        params = (self.weights_, self.means_ - centre, self.precisions_cholesky_)
+        unit, _ = _unit(self.means_ - centre, self.covariances_, self.weights_)
+        params = (self.weights_, (self.means_ - centre) / unit, self.precisions_cholesky_ * unit)
         for start in range(0, len(prims), _SCORE_CHUNK):
             block = slice(start, start + _SCORE_CHUNK)
-            yield _log_rho(_moment_features(prims.means[block], prims.covariances[block], centre, 1.0), params)
+            features = _moment_features(prims.means[block], prims.covariances[block], centre, 1.0, unit)
+            yield _log_rho(features, params, unit=unit)
 
     def _log_norm(self, prims):
-        return np.concatenate([_normalise_in_place(block) for block in self._log_rho_blocks(prims)])
+        log_norm = np.concatenate([_normalise_in_place(block) for block in self._log_rho_blocks(prims)])
+        if not np.all(np.isfinite(log_norm)):
+            raise InputError(f"{np.count_nonzero(~np.isfinite(log_norm))} of {len(log_norm)} primitives have a "
+                             f"log-likelihood beyond float64 under this mixture: they lie too far from it")
+        return log_norm
 
     def score_samples(self, X):
         """Log-likelihood of each point, shape (n_points,)."""

@@ -13,6 +13,10 @@ import numpy as np
 
 from dgmm.errors import InputError
 
+MAX_COORDINATE = 1e152
+"""Largest coordinate magnitude accepted: EM, scores and triangle moments square coordinates, and float64 stops
+at 1.8e308 (so ``dgmm.GaussianMixture().fit(points * 1e200)`` is an InputError, not a mixture of NaN)."""
+
 
 def _check_finite(name, array):
     if not np.all(np.isfinite(array)):
@@ -30,6 +34,10 @@ def _as_points(name, array):
     if len(points) == 0:
         raise InputError(f"{name} is empty")
     _check_finite(name, points)
+    peak = np.abs(points).max()
+    if peak > MAX_COORDINATE:
+        raise InputError(f"{name} has coordinates up to {peak:.3g}, beyond the {MAX_COORDINATE:.0e} that squared "
+                         f"units allow in float64: rescale the input (for example to metres)")
     return points
 
 
@@ -49,8 +57,12 @@ def triangle_moments(triangles):
         ``(A Aᵀ + B Bᵀ + C Cᵀ − 3 m mᵀ) / 12`` with ``m`` the centroid (paper eq. 9, ``cov(△)``).
     """
     centroids = triangles.mean(axis=1)
-    crosses = np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0])
-    areas = 0.5 * np.linalg.norm(crosses, axis=1)
+    edges = triangles[:, 1:] - triangles[:, :1]
+    # Each triangle's edges scaled by a power of two near their length (exact), so that the squares in the norm
+    # neither underflow (edges of 1e-160) nor overflow, then the area scaled back (exact again).
+    _, exponents = np.frexp(np.abs(edges).max(axis=(1, 2)))
+    edges = np.ldexp(edges, -exponents[:, None, None])
+    areas = np.ldexp(0.5 * np.linalg.norm(np.cross(edges[:, 0], edges[:, 1]), axis=1), 2 * exponents)
     # Centre on the centroid first: the same formula, without cancellation between large terms.
     local = triangles - centroids[:, None, :]
     covariances = np.einsum("tvi,tvj->tij", local, local) / 12.0
