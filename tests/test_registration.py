@@ -14,6 +14,7 @@ from dgmm import InputError
 from dgmm import registration as reg
 from dgmm.registration import d2d, p2d, pose
 from dgmm.registration.fitted import FittedMixture
+from dgmm.registration.rotations import exp_rotation
 
 BUNNY = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "stanford" / "bunny_res4.ply"
 
@@ -198,6 +199,86 @@ def test_d2d_gradient_matches_central_differences(seed):
     np.testing.assert_allclose(gradient, numeric, rtol=0, atol=1e-7 * np.linalg.norm(numeric))
 
 
+def _perturbed(evaluate, rotation, translation):
+    """The cost and the first output of ``derivatives()`` as functions of ``(δ, ω)``: ``exp([ω]x) R``, ``t' + δ``."""
+    def at(x):
+        return evaluate(exp_rotation(x[3:]) @ rotation, translation + x[:3])
+    return (lambda x: at(x)[0]), (lambda x: at(x)[1]()[0])
+
+
+def _pose_cost_cases(seed):
+    """(name, evaluate, rotation, translation) of a P2D and a D2D pose cost away from their optimum."""
+    rng = np.random.default_rng(200 + seed)
+    fixed = FittedMixture.from_fitted("f", _random_mixture(rng, 6))
+    moving = FittedMixture.from_fitted("m", _random_mixture(rng, 5))
+    points = 2 * rng.normal(size=(40, 3))
+    rotation, translation = Rotation.random(rng=rng).as_matrix(), 0.5 * rng.normal(size=3)
+    return [("p2d", p2d.p2d_pose_cost(points, points.mean(axis=0), fixed), rotation, translation),
+            ("d2d", d2d.d2d_pose_cost(fixed, moving, moving.centroid), rotation, translation)]
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_pose_gradients_match_central_differences(seed):
+    """The Gauss-Newton solver's 6-dof gradients (left rotation, translation) against the costs themselves."""
+    for name, evaluate, rotation, translation in _pose_cost_cases(seed):
+        cost, gradient = _perturbed(evaluate, rotation, translation)
+        numeric = _central_differences(cost, np.zeros(6), 1e-6)
+        np.testing.assert_allclose(gradient(np.zeros(6)), numeric, rtol=0, atol=1e-7 * np.linalg.norm(numeric),
+                                   err_msg=name)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_p2d_hessian_matches_central_differences_of_the_cost(seed):
+    """The exact P2D Hessian against second central differences of the cost along random directions (Richardson
+    extrapolated from steps h and h/2, so the truncation error is O(h⁴))."""
+    _, evaluate, rotation, translation = _pose_cost_cases(seed)[0]
+    cost, _ = _perturbed(evaluate, rotation, translation)
+    hessian = evaluate(rotation, translation)[1]()[2]
+
+    def second(direction, h):
+        return (cost(h * direction) - 2 * cost(np.zeros(6)) + cost(-h * direction)) / h**2
+
+    for direction in np.random.default_rng(seed).normal(size=(6, 6)):
+        numeric = (4 * second(direction, 5e-5) - second(direction, 1e-4)) / 3
+        assert direction @ hessian @ direction == pytest.approx(numeric, rel=1e-5, abs=1e-6 * np.abs(hessian).max())
+
+
+def test_gauss_newton_matrices_are_positive_semi_definite():
+    for name, evaluate, rotation, translation in _pose_cost_cases(0):
+        gauss_newton = evaluate(rotation, translation)[1]()[1]
+        assert np.linalg.eigvalsh(gauss_newton).min() >= -1e-12 * np.abs(gauss_newton).max(), name
+
+
+def _pose_difference(a, b, diagonal):
+    """Rotation angle between two results (radians) and the largest entry of their translation difference."""
+    return np.radians(reg.rotation_distance_deg(a.rotation, b.rotation)), np.abs(a.translation - b.translation).max()
+
+
+def test_p2d_solvers_reach_the_same_optimum(bunny):
+    """On well-posed bunny trials BFGS (driven to its tightest gradient test) and Gauss-Newton agree."""
+    for trial in reg.random_trials(5, 50, bunny.diagonal, bunny.vertices.mean(axis=0)):
+        source = trial.apply(bunny.vertices)
+        bfgs = reg.register_p2d(source, bunny.mixture, options={"gtol": 1e-9})
+        newton = reg.register_p2d(source, bunny.mixture, solver="gauss-newton")
+        assert newton.converged and newton.method == "p2d"
+        rotation_rad, translation = _pose_difference(bfgs, newton, bunny.diagonal)
+        assert rotation_rad < 1e-6 and translation < 1e-6 * bunny.diagonal
+        assert newton.objective <= bfgs.objective + 1e-12 * abs(bfgs.objective)
+
+
+def test_d2d_solvers_reach_the_same_optimum(bunny, bunny_trial):
+    c, r, t = bunny_trial.centre, bunny_trial.rotation, bunny_trial.translation
+    for trial in reg.random_trials(3, 51, bunny.diagonal, c, max_angle_deg=3.0, max_translation=0.005):
+        moving = _transformed_mixture(bunny.mixture, trial.rotation, trial.centre + trial.translation
+                                      - trial.rotation @ trial.centre)
+        bfgs = reg.register_d2d(bunny.mixture, moving, options={"gtol": 1e-9})
+        newton = reg.register_d2d(bunny.mixture, moving, solver="gauss-newton")
+        assert newton.converged and newton.method == "d2d"
+        rotation_rad, translation = _pose_difference(bfgs, newton, bunny.diagonal)
+        assert rotation_rad < 1e-6 and translation < 1e-6 * bunny.diagonal
+        assert reg.registration_errors(newton, trial, bunny.diagonal)[0] < 1e-4
+
+
 # ----------------------------------------------------------------------------------- recovering a pose
 @pytest.mark.parametrize("gradient", ["analytic", "numeric"])
 def test_p2d_recovers_a_known_motion(bunny, bunny_trial, gradient):
@@ -305,6 +386,12 @@ def test_bad_mixtures_and_options_raise_input_error():
         reg.register_d2d(good, SimpleNamespace(**{**vars(good), "weights_": np.ones(4) / 4}))
     with pytest.raises(InputError, match="gradient"):
         reg.register_p2d(points, good, gradient="central")
+    with pytest.raises(InputError, match="solver"):
+        reg.register_p2d(points, good, solver="newton")
+    with pytest.raises(InputError, match="bfgs"):
+        reg.register_d2d(good, good, solver="gauss-newton", gradient="numeric")
+    with pytest.raises(InputError, match="max_iter"):
+        reg.register_p2d(points, good, solver="gauss-newton", options={"maxiter": 3})
     with pytest.raises(InputError):
         reg.quaternion_to_matrix(np.zeros(4))
     with pytest.raises(InputError):

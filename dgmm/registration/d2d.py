@@ -10,17 +10,13 @@ from functools import partial
 
 import numpy as np
 
-from dgmm.registration.fitted import EXP_FLOOR, FittedMixture
+from dgmm.registration.fitted import EXP_FLOOR, FULL_INDEX as _FULL, FittedMixture
 from dgmm.registration.pose import params_from_pose
-from dgmm.registration.rotations import rotation_and_jacobian
+from dgmm.registration.rotations import LEVI_CIVITA, rotation_and_jacobian
 from dgmm.registration.solvers import (TRANSLATION_UNIT, check_solver, minimise_bfgs, minimise_gauss_newton,
-                                       pose_derivatives)
+                                       pose_derivatives, rotation_curvature)
 
-_ROWS, _COLS = np.array([0, 1, 2, 0, 0, 1]), np.array([0, 1, 2, 1, 2, 2])
-_FULL = np.array([[0, 3, 4], [3, 1, 5], [4, 5, 2]])
-"""Index into the 6 distinct entries (xx, yy, zz, xy, xz, yz) of each entry of a symmetric 3x3 matrix."""
-_LEVI_CIVITA = np.zeros((3, 3, 3))
-_LEVI_CIVITA[[0, 1, 2], [1, 2, 0], [2, 0, 1]], _LEVI_CIVITA[[0, 1, 2], [2, 0, 1], [1, 2, 0]] = 1.0, -1.0
+_ROWS, _COLS = np.array([0, 1, 2, 0, 0, 1]), np.array([0, 1, 2, 1, 2, 2])  # the 6 distinct entries of a symmetric 3x3
 
 
 def _pairs(rotation, translation, fixed, moving, centre):
@@ -47,8 +43,15 @@ def _pairs(rotation, translation, fixed, moving, centre):
                         + rotated_covariances[:, _ROWS, _COLS].T[:, None, :])
     inverse = np.array([b * c - f * f, a * c - e * e, a * b - d * d, e * f - d * c, d * f - b * e, d * e - a * f])
     inverse /= a * inverse[0] + d * inverse[3] + e * inverse[4]
-    v = np.einsum("rsij,sij->rij", inverse[_FULL], y)
-    terms = np.outer(fixed.weights, moving.weights) * np.exp(np.maximum(-0.5 * np.einsum("rij,rij->ij", y, v), EXP_FLOOR))
+    (yx, yy, yz), (ixx, iyy, izz, ixy, ixz, iyz) = y, inverse
+    v = np.array([ixx * yx + ixy * yy + ixz * yz, ixy * yx + iyy * yy + iyz * yz, ixz * yx + iyz * yy + izz * yz])
+    exponent = yx * v[0]
+    exponent += yy * v[1]
+    exponent += yz * v[2]
+    exponent *= -0.5
+    terms = np.exp(np.maximum(exponent, EXP_FLOOR, out=exponent), out=exponent)
+    terms *= fixed.weights[:, None]
+    terms *= moving.weights[None, :]
     return -float(terms.sum()), rotated, rotated_covariances, terms, v, inverse
 
 
@@ -90,13 +93,16 @@ def d2d_cost(params, fixed, moving, centre, with_grad):
 def d2d_pose_cost(fixed, moving, centre):
     """The D2D cost as :func:`~dgmm.registration.solvers.minimise_gauss_newton` evaluates it.
 
-    The gradient is exact; the Gauss-Newton matrix weighs each moving mean by ``Σᵢ termsᵢⱼ Sᵢⱼ⁻¹`` and leaves out
-    the rotation of the covariances (the EM majoriser of ``-log(-f)``, which has the same minimiser, times ``-f``).
+    The gradient is exact. The Gauss-Newton matrix weighs each moving mean by ``Σᵢ termsᵢⱼ Sᵢⱼ⁻¹`` (the EM
+    majoriser of ``-log(-f)``, which has the same minimiser, times ``-f``); the second matrix is the exact Hessian
+    in the moving means, ``Σᵢ termsᵢⱼ (Sᵢⱼ⁻¹ - vᵢⱼ vᵢⱼᵀ)`` plus the curvature of the rotation. Both leave out the
+    second-order terms of the rotating covariances, so the last steps converge linearly.
 
     Returns
     -------
     evaluate : callable
-        ``evaluate(rotation, translation) -> (cost, derivatives)``.
+        ``evaluate(rotation, translation) -> (cost, derivatives)``; ``derivatives() -> (gradient (6,),
+        gauss_newton (6, 6), means_hessian (6, 6))``.
     """
 
     def evaluate(rotation, translation):
@@ -105,10 +111,11 @@ def d2d_pose_cost(fixed, moving, centre):
         def derivatives():
             grad_moved, outer = _moving_derivatives(terms, v)
             weight = np.einsum("ij,sij->js", terms, inverse)[:, _FULL]
-            gradient, hessian = pose_derivatives(rotated, grad_moved, weight)
+            gradient, (hessian, means_hessian) = pose_derivatives(rotated, grad_moved, weight, weight - outer)
+            means_hessian[3:, 3:] += rotation_curvature(rotated, grad_moved)
             # The covariances turn with ω: dS/dω_a = [e_a]x C - C [e_a]x gives d f / d ω = -Σ ε (C O).
-            gradient[3:] -= np.einsum("abc,jbd,jdc->a", _LEVI_CIVITA, rotated_covariances, outer)
-            return gradient, hessian
+            gradient[3:] -= np.einsum("abc,jbd,jdc->a", LEVI_CIVITA, rotated_covariances, outer)
+            return gradient, hessian, means_hessian
 
         return cost, derivatives
 

@@ -21,6 +21,8 @@ EXP_FLOOR = -700.0
 ``e^-700 ~ 1e-304`` beside a largest term of 1 changes no sum of fewer than 1e288 terms."""
 _UPPER = (np.array([0, 1, 2, 0, 0, 1]), np.array([0, 1, 2, 1, 2, 2]))
 """Row and column of the 6 distinct entries of a symmetric 3x3 matrix: xx, yy, zz, xy, xz, yz."""
+FULL_INDEX = np.array([[0, 3, 4], [3, 1, 5], [4, 5, 2]])
+"""Index into those 6 entries of each entry of the full 3x3 matrix."""
 
 
 def quadratic_features(offsets):
@@ -121,3 +123,18 @@ class FittedMixture:
         every point's gradient ``Σ_k r_k P_k (d - m_k)`` and Gauss-Newton weight ``Σ_k r_k P_k``."""
         p = self.precisions
         return np.column_stack([p.reshape(-1, 9), np.einsum("kab,kb->ka", p, self.means - self.origin)])
+
+    @cached_property
+    def gradient_outer_table(self):
+        """Coefficients of ``g gᵀ`` (6 distinct entries), ``g = P_k (d - m_k)``, on :func:`quadratic_features` of
+        ``d``, shape (n_components, 60): responsibilities times it, contracted with the features, give each
+        point's ``Σ_k r_k g_k g_kᵀ`` (the spread term of the exact Hessian of ``-log p``)."""
+        p = self.precisions
+        pm = np.einsum("kab,kb->ka", p, self.means - self.origin)
+        rows, cols = _UPPER
+        p_a, p_b = p[:, rows], p[:, cols]  # rows a and b of P_k for each entry (a, b) of g gᵀ, (n_components, 6, 3)
+        outer = p_a[:, :, :, None] * p_b[:, :, None, :]
+        quadratic = (outer + outer.swapaxes(2, 3))[:, :, rows, cols] * np.where(rows == cols, 0.5, 1.0)
+        linear = -(pm[:, cols, None] * p_a + pm[:, rows, None] * p_b)
+        constant = pm[:, rows] * pm[:, cols]
+        return np.concatenate([quadratic, linear, constant[:, :, None]], axis=2).reshape(len(p), 60)

@@ -13,11 +13,11 @@ from functools import partial
 import numpy as np
 
 from dgmm.registration.checks import as_points
-from dgmm.registration.fitted import EXP_FLOOR, FittedMixture, quadratic_features
+from dgmm.registration.fitted import EXP_FLOOR, FULL_INDEX as _FULL, FittedMixture, quadratic_features
 from dgmm.registration.pose import IDENTITY_PARAMS
 from dgmm.registration.rotations import rotation_and_jacobian
 from dgmm.registration.solvers import (TRANSLATION_UNIT, minimise_bfgs, minimise_gauss_newton, pose_derivatives,
-                                       check_solver)
+                                       rotation_curvature, check_solver)
 
 
 def _likelihood(moved, mixture):
@@ -43,12 +43,19 @@ def _likelihood(moved, mixture):
 
 
 def _point_derivatives(offsets, resp, total, mixture):
-    """Each point's gradient ``Σ_k r_nk P_k (y_n - μ_k)`` (n_points, 3) and weight ``Σ_k r_nk P_k`` (n_points, 3, 3)
-    of ``-log p(y_n)``, ``r_nk`` the normalised responsibilities."""
+    """Each point's gradient ``ḡ_n = Σ_k r_nk g_nk``, ``g_nk = P_k (y_n - μ_k)``, of ``-log p(y_n)`` (n_points, 3)
+    and its Gauss-Newton weight ``Σ_k r_nk P_k`` (n_points, 3, 3), ``r_nk`` the normalised responsibilities."""
     moments = resp @ mixture.moment_table
     moments /= total[:, None]
     weight = moments[:, :9].reshape(-1, 3, 3)
     return np.einsum("nab,nb->na", weight, offsets) - moments[:, 9:], weight
+
+
+def _point_hessians(offsets, resp, total, mixture, gradient, weight):
+    """Exact Hessian of ``-log p(y_n)``: ``Σ_k r_nk P_k - (Σ_k r_nk g_nk g_nkᵀ - ḡ_n ḡ_nᵀ)``, (n_points, 3, 3)."""
+    spread = np.einsum("nef,nf->ne", (resp @ mixture.gradient_outer_table).reshape(-1, 6, 10),
+                       quadratic_features(offsets)) / total[:, None]
+    return weight - spread[:, _FULL] + gradient[:, :, None] * gradient[:, None, :]
 
 
 def p2d_cost(params, points, centre, mixture, with_grad):
@@ -85,7 +92,8 @@ def p2d_pose_cost(points, centre, mixture):
     -------
     evaluate : callable
         ``evaluate(rotation, translation) -> (cost, derivatives)`` for the pose ``x -> R (x - c) + c + t'``;
-        ``derivatives()`` gives the gradient (6,) and Gauss-Newton matrix (6, 6) over ``(δ, ω)``.
+        ``derivatives()`` gives the gradient (6,), the Gauss-Newton matrix (6, 6) and the exact Hessian (6, 6)
+        over ``(δ, ω)``.
     """
     local = points - centre
     n_points = len(points)
@@ -96,7 +104,13 @@ def p2d_pose_cost(points, centre, mixture):
 
         def derivatives():
             gradient, weight = _point_derivatives(offsets, resp, total, mixture)
-            return pose_derivatives(rotated, gradient / n_points, weight / n_points)
+            hessian = _point_hessians(offsets, resp, total, mixture, gradient, weight)
+            gradient /= n_points
+            pose_gradient, (gauss_newton, exact) = pose_derivatives(rotated, gradient, weight, hessian)
+            gauss_newton /= n_points
+            exact /= n_points
+            exact[3:, 3:] += rotation_curvature(rotated, gradient)
+            return pose_gradient, gauss_newton, exact
 
         return cost, derivatives
 

@@ -1,8 +1,8 @@
 """Rotations: quaternions (scalar-first ``(w, x, y, z)``), matrices, rotation vectors, Euler angles, distances.
 
 Every function accepts one rotation or a stack of them (rows are items). The pose optimisers' derivatives live here
-too: the rotation of an unnormalised quaternion with its Jacobian (BFGS), and the exponential map with the skew
-matrix of the left perturbation ``R -> exp([w]x) R`` (Gauss-Newton).
+too: the rotation of an unnormalised quaternion with its Jacobian (BFGS), and the exponential map of the left
+perturbation ``R -> exp([w]x) R`` (Gauss-Newton).
 """
 from __future__ import annotations
 
@@ -160,26 +160,21 @@ def rotation_and_jacobian(quaternion):
 
 
 
-def skew(vectors):
-    """Cross-product matrices ``[v]x`` with ``[v]x u = v x u``.
-
-    Parameters
-    ----------
-    vectors : ndarray of shape (3,) or (n, 3)
-
-    Returns
-    -------
-    matrices : ndarray of shape (3, 3) or (n, 3, 3)
-    """
-    x, y, z = np.moveaxis(np.asarray(vectors, dtype=np.float64), -1, 0)
-    zero = np.zeros_like(x)
-    return np.moveaxis(np.array([[zero, -z, y], [z, zero, -x], [-y, x, zero]]), (0, 1), (-2, -1))
-
-
 def exp_rotation(rotvec):
     """Rotation matrix ``exp([w]x)`` of one rotation vector ``w`` of shape (3,) (Rodrigues' formula)."""
-    theta = float(np.linalg.norm(rotvec))
-    k = skew(rotvec)
-    if theta < 1e-8:
-        return np.eye(3) + k + 0.5 * k @ k
-    return np.eye(3) + (np.sin(theta) / theta) * k + ((1.0 - np.cos(theta)) / theta**2) * k @ k
+    x, y, z = rotvec
+    theta2 = x * x + y * y + z * z
+    if theta2 < 1e-16:
+        a, b = 1.0, 0.5
+    else:
+        theta = np.sqrt(theta2)
+        a, b = np.sin(theta) / theta, (1.0 - np.cos(theta)) / theta2
+    # I + a K + b K², with K² = w wᵀ - |w|² I
+    return np.array([[1.0 - b * (y * y + z * z), b * x * y - a * z, b * x * z + a * y],
+                     [b * x * y + a * z, 1.0 - b * (x * x + z * z), b * y * z - a * x],
+                     [b * x * z - a * y, b * y * z + a * x, 1.0 - b * (x * x + y * y)]])
+
+
+LEVI_CIVITA = np.zeros((3, 3, 3))
+"""The permutation symbol ``ε_abc``: ``(u x v)_a = ε_abc u_b v_c``."""
+LEVI_CIVITA[[0, 1, 2], [1, 2, 0], [2, 0, 1]], LEVI_CIVITA[[0, 1, 2], [2, 0, 1], [1, 2, 0]] = 1.0, -1.0

@@ -6,10 +6,12 @@ Both minimise a cost of the pose ``x -> R (x - c) + c + t'`` about a fixed centr
 - ``"bfgs"`` (the paper's): scipy's BFGS over the 7-vector ``(t', q)``, the quaternion normalised inside the cost,
   with the cost's analytic gradient or BFGS's forward differences.
 - ``"gauss-newton"``: each step solves ``(H + λ diag H) (δ, ω) = -g`` for a translation ``δ`` and a left rotation
-  ``R -> exp([ω]x) R``, where ``g`` is the cost's exact gradient and ``H`` a positive semi-definite Gauss-Newton
-  matrix with the responsibilities of the current pose (EM-ICP, FilterReg). A step is kept only if it lowers the
-  cost (else ``λ`` grows tenfold); it stops when a kept step moves less than ``tol`` (radians, and translation
-  lengths).
+  ``R -> exp([ω]x) R``, where ``g`` is the cost's exact gradient and ``H`` its Hessian where that is positive
+  definite (Newton steps near the optimum), else a positive semi-definite Gauss-Newton matrix with the
+  responsibilities of the current pose (EM-ICP, FilterReg). A step is kept only if it lowers the cost (else
+  ``λ`` grows tenfold); a kept Gauss-Newton step, which far from the optimum falls short like an EM step, is
+  stretched 2, 4, 8 times while the cost keeps falling. It stops when a step moves less than ``tol`` (radians,
+  and lengths of the moving points' RMS radius).
 """
 from __future__ import annotations
 
@@ -21,7 +23,7 @@ from scipy.optimize import minimize
 
 from dgmm.errors import InputError
 from dgmm.registration.pose import Registration, pose_from_params
-from dgmm.registration.rotations import exp_rotation, skew
+from dgmm.registration.rotations import LEVI_CIVITA, exp_rotation
 
 SOLVERS = ("bfgs", "gauss-newton")
 """Names accepted by ``register_p2d(solver=...)`` and ``register_d2d(solver=...)``; BFGS is the paper's."""
@@ -89,11 +91,13 @@ def minimise_bfgs(method, cost, centre, length, x0, gradient, callback, options)
     return snapshot(result.x, result.fun, int(result.nit), bool(result.success))
 
 
-_GAUSS_NEWTON_DEFAULTS = {"max_iter": 100, "tol": 1e-10, "damping": 1e-4}
+_GAUSS_NEWTON_DEFAULTS = {"max_iter": 100, "tol": 1e-8, "damping": 1e-4}
+_MIN_DAMPING, _MAX_DAMPING = 1e-12, 1e12
+_STRETCH = (2.0, 4.0, 8.0)
 
 
-def pose_derivatives(rotated, gradient, weight):
-    """Gradient and Gauss-Newton matrix over ``(δ, ω)`` of a cost of moved points ``y_n = exp([ω]x) p_n + c + t' + δ``.
+def pose_derivatives(rotated, gradient, *weights):
+    """Gradient and Gauss-Newton matrices over ``(δ, ω)`` of a cost of moved points ``y_n = exp([ω]x) p_n + c + t' + δ``.
 
     Parameters
     ----------
@@ -101,24 +105,42 @@ def pose_derivatives(rotated, gradient, weight):
         ``p_n = R (x_n - c)``, the rotated offsets from the centre.
     gradient : ndarray of shape (n, 3)
         ``d cost / d y_n``.
-    weight : ndarray of shape (n, 3, 3)
-        Symmetric positive semi-definite Gauss-Newton weight of each point, ``W_n``.
+    *weights : ndarray of shape (n, 3, 3)
+        Symmetric weights ``W_n`` of each point (a Gauss-Newton weight, or the Hessian in ``y_n``).
 
     Returns
     -------
     gradient : ndarray of shape (6,)
         ``(Σ g_n, Σ p_n x g_n)``: ``dy/dδ = I`` and ``dy/dω = -[p_n]x``.
-    hessian : ndarray of shape (6, 6)
-        ``Σ J_nᵀ W_n J_n`` with ``J_n = [I, -[p_n]x]``.
+    matrices : list of ndarray of shape (6, 6)
+        ``Σ J_nᵀ W_n J_n`` with ``J_n = [I, -[p_n]x]`` for each weight, from one product of the weights with
+        ``(1, p_n, p_n p_nᵀ)``.
     """
-    cross = skew(rotated)
-    weighted_cross = weight @ cross
-    hessian = np.empty((6, 6))
-    hessian[:3, :3] = weight.sum(axis=0)
-    hessian[:3, 3:] = -weighted_cross.sum(axis=0)
-    hessian[3:, :3] = hessian[:3, 3:].T
-    hessian[3:, 3:] = -np.einsum("nab,nbc->ac", cross, weighted_cross)
-    return np.concatenate([gradient.sum(axis=0), np.cross(rotated, gradient).sum(axis=0)]), hessian
+    basis = np.column_stack([np.ones(len(rotated)), rotated, (rotated[:, :, None] * rotated[:, None, :]).reshape(-1, 9)])
+    sums = (np.concatenate([w.reshape(-1, 9) for w in weights], axis=1).T @ basis).reshape(len(weights), 3, 3, 13)
+    matrices = []
+    for m in sums:
+        # ([p]x)_cb = ε_cdb p_d: Σ W [p]x = ε_cdb Σ W_ac p_d, Σ [p]x W [p]x = ε_aec ε_dfb Σ W_cd p_e p_f.
+        cross = np.einsum("cdb,acd->ab", LEVI_CIVITA, m[:, :, 1:4])
+        hessian = np.empty((6, 6))
+        hessian[:3, :3] = m[:, :, 0]
+        hessian[:3, 3:] = -cross
+        hessian[3:, :3] = -cross.T
+        hessian[3:, 3:] = -np.einsum("aec,dfb,cdef->ab", LEVI_CIVITA, LEVI_CIVITA, m[:, :, 4:].reshape(3, 3, 3, 3))
+        matrices.append(hessian)
+    moments = rotated.T @ gradient  # Σ p_n g_nᵀ; Σ p_n x g_n is its antisymmetric part
+    torque = [moments[1, 2] - moments[2, 1], moments[2, 0] - moments[0, 2], moments[0, 1] - moments[1, 0]]
+    return np.concatenate([gradient.sum(axis=0), torque]), matrices
+
+
+def rotation_curvature(rotated, gradient):
+    """Second-order part of the ``ω`` Hessian of a cost of points ``y_n = exp([ω]x) p_n + ...`` at ``ω = 0``.
+
+    ``exp([ω]x) p ≈ p + ω x p + ½ ω x (ω x p)`` and ``gᵀ (ω x (ω x p)) = ωᵀ (g pᵀ - (g·p) I) ω``, so the
+    term is ``Σ_n sym(g_n p_nᵀ) - (g_n·p_n) I``, shape (3, 3).
+    """
+    outer = gradient.T @ rotated
+    return 0.5 * (outer + outer.T) - np.trace(outer) * np.eye(3)
 
 
 def minimise_gauss_newton(method, evaluate, centre, length, rotation, translation, callback, options):
@@ -130,7 +152,9 @@ def minimise_gauss_newton(method, evaluate, centre, length, rotation, translatio
         Name stored in the result.
     evaluate : callable
         ``evaluate(rotation, translation) -> (cost, derivatives)`` for the pose ``x -> R (x - c) + c + t'``;
-        ``derivatives() -> (gradient (6,), hessian (6, 6))`` over ``(δ, ω)``, called only for kept poses.
+        ``derivatives() -> (gradient (6,), gauss_newton (6, 6), exact (6, 6) or None)`` over ``(δ, ω)``,
+        called only for kept poses. The exact Hessian is used where it is positive definite (Newton steps,
+        quadratic convergence near the optimum), the Gauss-Newton matrix elsewhere.
     centre : ndarray of shape (3,)
     length : float
         Scale of the moving points: the translation part of the stopping test is ``|δ| / length``.
@@ -162,25 +186,31 @@ def minimise_gauss_newton(method, evaluate, centre, length, rotation, translatio
     converged = False
     iteration = 0
     while iteration < max_iter and not converged:
-        gradient, hessian = derivatives()
+        gradient, hessian, exact = derivatives()
+        newton = exact is not None and _positive_definite(exact)
+        if newton:
+            hessian = exact
         while True:
-            damped = hessian + damping * np.diag(np.diag(hessian))
-            try:
-                step = -np.linalg.solve(damped, gradient)
-            except np.linalg.LinAlgError:
-                step = np.zeros(6)
+            step = _damped_step(hessian, gradient, damping)
             new_rotation, new_translation = exp_rotation(step[3:]) @ rotation, translation + step[:3]
             new_cost, new_derivatives = evaluate(new_rotation, new_translation)
-            small = np.max(np.abs(step) / scale) < tol
-            if new_cost <= cost or small or damping > 1e12:
+            converged = np.max(np.abs(step) / scale) < tol
+            if new_cost <= cost or converged or damping > _MAX_DAMPING:
                 break
             damping *= 10.0
-        if new_cost <= cost:
+        if new_cost > cost:
+            if not converged:
+                break
+        else:
+            # Far from the optimum the Gauss-Newton (EM) steps fall short: stretch a kept one while the cost falls.
+            for factor in (_STRETCH if not newton and not converged else ()):
+                far_rotation, far_translation = exp_rotation(factor * step[3:]) @ rotation, translation + factor * step[:3]
+                far_cost, far_derivatives = evaluate(far_rotation, far_translation)
+                if far_cost >= new_cost:
+                    break
+                new_rotation, new_translation, new_cost, new_derivatives = far_rotation, far_translation, far_cost, far_derivatives
             rotation, translation, cost, derivatives = new_rotation, new_translation, new_cost, new_derivatives
-            damping = max(damping / 10.0, 1e-12)
-        converged = small
-        if not converged and damping > 1e12:
-            break
+            damping = max(damping / 10.0, _MIN_DAMPING)
         iteration += 1
         if callback is not None:
             callback(iteration, snapshot(cost, iteration, False))
@@ -195,3 +225,20 @@ def check_solver(solver, gradient):
         raise InputError(f"gradient must be one of {sorted(_GRADIENT_MODES)}, got {gradient!r}")
     if solver != "bfgs" and gradient != "analytic":
         raise InputError(f"gradient={gradient!r} applies to solver='bfgs' only; {solver!r} uses the analytic one")
+
+
+def _damped_step(hessian, gradient, damping):
+    """``-(H + λ diag H)⁻¹ g``, or no step if that matrix is singular."""
+    try:
+        return -np.linalg.solve(hessian + damping * np.diag(np.diag(hessian)), gradient)
+    except np.linalg.LinAlgError:
+        return np.zeros(len(gradient))
+
+
+def _positive_definite(matrix):
+    """Whether a symmetric matrix has a Cholesky factor."""
+    try:
+        np.linalg.cholesky(matrix)
+    except np.linalg.LinAlgError:
+        return False
+    return True
