@@ -5,9 +5,11 @@ table, ``respᵀ · moments`` of shape ``(n_components, 10)``, and each primitiv
 :class:`BlockPass` computes such products block by block of rows, so memory holds one
 ``(rows, n_components)`` block per thread, never the whole matrix.
 
-Blocks depend only on ``n_components`` and the memory limit, and their partial sums are added in block order,
-so the thread count never changes a bit of the result. An input whose responsibilities fit in one block is
-computed exactly as without blocks (every fit of the paper sweep does).
+An input whose responsibilities fit in the memory limit is one block, computed exactly as without blocks (every
+fit of the paper sweep is). A larger one streams in cache-sized blocks of :data:`CACHE_BLOCK_BYTES`: EM's
+passes over a block then stay in the CPU cache, which makes them several times faster than over one large
+block. Blocks depend only on the input size, ``n_components`` and the memory limit, and their partial sums
+are added in block order, so the thread count never changes a bit of the result.
 """
 from __future__ import annotations
 
@@ -19,9 +21,9 @@ from contextlib import ExitStack
 import numpy as np
 
 DEFAULT_MEMORY_LIMIT = 128 * 2**20
-"""Bytes of working memory per thread (one block of responsibilities and its row features)."""
-MAX_BLOCK_ROWS = 2**17
-"""Rows per block at most, so that large inputs split into enough blocks to share between threads."""
+"""Bytes of responsibilities (and their row features) that may be held at once: larger inputs stream."""
+CACHE_BLOCK_BYTES = 2 * 2**20
+"""Bytes of one streamed block (about a core's share of L2 cache)."""
 _ROW_FLOATS = 24  # float64 per row beside the responsibilities: E-step features, weighted moments, row sums
 
 _controller = None
@@ -36,9 +38,13 @@ def _blas_controller():
     return _controller
 
 
-def block_rows(n_components, memory_limit):
-    """Rows per block: as many as ``memory_limit`` bytes hold, at least 1, at most :data:`MAX_BLOCK_ROWS`."""
-    return int(min(MAX_BLOCK_ROWS, max(1, memory_limit // (8 * (n_components + _ROW_FLOATS)))))
+def block_rows(n_rows, n_components, memory_limit):
+    """Rows per block: all ``n_rows`` if they fit in ``memory_limit`` bytes, else as many as
+    ``min(memory_limit, CACHE_BLOCK_BYTES)`` bytes hold (at least 1)."""
+    row_bytes = 8 * (n_components + _ROW_FLOATS)
+    if n_rows * row_bytes <= memory_limit:
+        return n_rows
+    return int(max(1, min(memory_limit, CACHE_BLOCK_BYTES) // row_bytes))
 
 
 def n_threads(n_jobs):
@@ -60,13 +66,13 @@ class BlockPass:
     ----------
     n_rows, n_components : int
     memory_limit : int
-        Bytes of working memory per thread; see :func:`block_rows`.
+        Bytes of responsibilities that may be held at once; see :func:`block_rows`.
     n_jobs : int or None
         Threads, as scikit-learn's ``n_jobs``.
     """
 
     def __init__(self, n_rows, n_components, memory_limit, n_jobs):
-        rows = block_rows(n_components, memory_limit)
+        rows = block_rows(n_rows, n_components, memory_limit)
         self.blocks = [slice(start, min(start + rows, n_rows)) for start in range(0, n_rows, rows)]
         self._shape = (min(rows, n_rows), n_components)
         self._threads = min(n_threads(n_jobs), len(self.blocks))

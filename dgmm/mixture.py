@@ -329,12 +329,12 @@ class GaussianMixture(BaseEstimator):
     callback : callable(iteration, model), optional
         Called after every EM iteration with the current parameters set on the model (logging hooks in here).
     memory_limit : int, default=128 MiB
-        Bytes of working memory per thread. EM streams over blocks of primitives, holding one block's
-        ``(rows, n_components)`` responsibilities per thread instead of all ``(n_prims, n_components)``: the
-        rows per block are ``memory_limit / (8 (n_components + 24))``, at most 131072. Beside the blocks, a fit
-        holds about 12 floats per primitive (plus its input). Blocks depend on nothing else, so the result is
-        the same for any ``n_jobs``; different limits change it only by rounding (about 1e-15 relative), and
-        inputs that fit in one block give exactly the unblocked EM.
+        Bytes of responsibilities EM may hold at once. An input whose ``(n_prims, n_components)``
+        responsibilities (8 (n_components + 24) bytes per primitive) fit is one block: exactly the unblocked
+        EM. A larger one streams through blocks of 2 MiB (or ``memory_limit`` if smaller) per thread, which
+        stay in the CPU cache; beside them a fit holds 12 floats per primitive (plus its input). Blocks
+        depend on nothing else, so the result is the same for any ``n_jobs``; another block size changes it
+        by rounding only (about 1e-14 of each parameter's scale per iteration).
     n_jobs : int or None, default=None
         Threads running the blocks of each EM iteration (BLAS runs one thread inside each): None is 1, -1
         every CPU, as in scikit-learn. Inputs of a single block use one thread. The k-means initialisation
