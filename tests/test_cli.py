@@ -2,7 +2,7 @@
 
 References are independent of the CLI: the library fitted in this process with the same settings, mixture
 log-densities from scipy, poses built here with scipy's Rotation, closed-form mixture moments, and the rerun CLI
-and mcap's reader for the recordings.
+and mcap's reader with Foxglove's decoder for the recordings.
 """
 import io
 import json
@@ -14,7 +14,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 import trimesh
-from mcap.reader import make_reader
 from scipy.spatial.transform import Rotation
 from scipy.special import logsumexp
 from scipy.stats import multivariate_normal
@@ -24,6 +23,7 @@ from dgmm.mixture import GaussianMixture
 from dgmm.primitives import Primitives
 
 from conftest import REPO, SHARED_DATA
+from tests.test_recording import read_blueprint, read_mcap
 
 BIN = Path(sys.executable).parent
 DGMM = str(BIN / "dgmm")
@@ -121,13 +121,12 @@ def test_recordings_pass_rerun_and_mcap_readers(fitted, model_path):
     assert verify.returncode == 0, verify.stderr
     check = subprocess.run([RERUN_CLI, "mcap", "check", str(folder / "bunny.mcap")], capture_output=True, text=True)
     assert check.returncode == 0, check.stderr
-    with open(folder / "bunny.mcap", "rb") as stream:
-        messages = [(channel.topic, json.loads(message.data))
-                    for _, channel, message in make_reader(stream).iter_messages()]
+    messages = read_mcap(folder / "bunny.mcap")
     with np.load(model_path) as model:
         history = json.loads(str(model["params"]))["history"]
-    assert [body["bound"] for topic, body in messages if topic == "/fit/iteration"] == history
-    assert [topic for topic, _ in messages].count("/fit/mixture") == 1
+    assert [body["bound"] for topic, _, body, _ in messages if topic == "/fit/iteration"] == history
+    assert [topic for topic, *_ in messages].count("/fit/mixture") == 1
+    assert read_blueprint(folder / "bunny.rrd")[0] == "iteration"
 
 
 # ---------------------------------------------------------------------------------------------------- sample

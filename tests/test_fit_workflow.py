@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from dgmm.tables import read_csv
-from tests.test_recording import read_mcap, read_rrd
+from tests.test_recording import read_blueprint, read_mcap, read_rrd
 from tests.workflow import RERUN, run_snakemake, snakemake_command
 
 pytestmark = pytest.mark.slow
@@ -65,6 +65,7 @@ def test_every_recording_reads_back_and_matches_the_table(sweep):
             assert bounds[-1] == float(row["bound"])
         verify = subprocess.run([str(RERUN), "rrd", "verify", str(job / "fit.rrd")], capture_output=True, text=True)
         assert verify.returncode == 0, verify.stderr
+        assert read_blueprint(job / "fit.rrd")[0] == "iteration"
         mixture = read_rrd(job / "fit.rrd", "/mixture")
         n_iter = int(seeds[0]["n_iter"])
         assert mixture["iteration"] == list(range(1, n_iter + 1))

@@ -16,7 +16,7 @@ from dgmm.errors import DataError
 from dgmm.odometry import first_frames, seconds_summary
 from dgmm.tum import read_sequence
 from dgmm.tables import read_csv
-from tests.test_recording import read_mcap, read_rrd
+from tests.test_recording import read_blueprint, read_mcap, read_rrd, xyz
 from tests.workflow import RERUN, TEST_CONFIG, TEST_CONFIG_FILE, run_snakemake
 
 METHODS = ["gmm-pixels", "gmm-points", "icp"]
@@ -117,16 +117,16 @@ def test_mcap_poses_equal_the_trajectory_files(stage):
         assert frames[0]["registration_seconds"] is None and all(f["registration_seconds"] > 0 for f in frames[1:])
         written = tum_rows(job / "trajectory.txt")
         ((schema, estimated),) = by_topic["/odometry/estimated"]
-        assert schema == "foxglove.PosesInFrame" and estimated["frame_id"] == "odometry"
-        positions = np.array([[p["position"][k] for k in "xyz"] for p in estimated["poses"]])
-        quaternions = np.array([[p["orientation"][k] for k in "xyzw"] for p in estimated["poses"]])
+        assert schema == "foxglove.PosesInFrame" and estimated.frame_id == "odometry"
+        positions = np.array([xyz(p.position) for p in estimated.poses])
+        quaternions = np.array([xyz(p.orientation, "xyzw") for p in estimated.poses])
         np.testing.assert_allclose(positions, written[:, 1:4], rtol=0, atol=1e-8)
         signs = np.sign(np.sum(quaternions * written[:, 4:], axis=1))
         np.testing.assert_allclose(quaternions * signs[:, None], written[:, 4:], rtol=0, atol=1e-8)
         # Ground truth: the groundtruth.txt rows at the frames' timestamps.
         ((schema, groundtruth),) = by_topic["/odometry/groundtruth"]
         rows = truth[[np.argmin(np.abs(truth[:, 0] - stamp)) for stamp in written[:, 0]]]
-        np.testing.assert_allclose([[p["position"][k] for k in "xyz"] for p in groundtruth["poses"]], rows[:, 1:4],
+        np.testing.assert_allclose([xyz(p.position) for p in groundtruth.poses], rows[:, 1:4],
                                    rtol=0, atol=1e-8)
 
 
@@ -136,6 +136,7 @@ def test_rrd_verifies_and_holds_every_frame(stage):
         path = stage / "odometry" / "synthetic" / method / "odometry.rrd"
         verify = subprocess.run([str(RERUN), "rrd", "verify", str(path)], capture_output=True, text=True)
         assert verify.returncode == 0, verify.stderr
+        assert read_blueprint(path)[0] == "frame"
         model = read_rrd(path, "/world/camera/model")
         assert sorted(model["frame"]) == list(range(N_FRAMES))
         if method == "icp":

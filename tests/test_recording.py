@@ -1,4 +1,5 @@
-"""Recorders read back with independent readers: mcap's reader + jsonschema, the rerun CLI and rerun's chunk reader.
+"""Recorders read back with independent readers: mcap's reader with Foxglove's protobuf decoder (mcap-protobuf-support)
+and jsonschema, the rerun CLI and rerun's chunk reader (recordings and their blueprints).
 
 Ellipsoids are checked against the covariances they came from through a quaternion-to-matrix formula written
 here, not the code's own conversion.
@@ -13,7 +14,12 @@ import jsonschema
 import numpy as np
 import pytest
 import trimesh
+from foxglove_schemas_protobuf.PosesInFrame_pb2 import PosesInFrame
+from foxglove_schemas_protobuf.SceneUpdate_pb2 import SceneUpdate
+from mcap.decoder import DecoderFactory
 from mcap.reader import make_reader
+from mcap_protobuf.decoder import DecoderFactory as ProtobufDecoderFactory
+from mcap_protobuf.schema import build_file_descriptor_set
 from rerun.chunk import RrdReader
 from scipy.spatial.transform import Rotation
 
@@ -21,20 +27,19 @@ from dgmm.errors import InputError
 from dgmm.mixture import GaussianMixture
 from dgmm.recording import (
     DEFAULT_N_SIGMA,
-    POSES_IN_FRAME_SCHEMA,
     FitRecorder,
     McapWriter,
+    OdometryRecorder,
+    RegistrationRecorder,
     covariance_ellipsoids,
+    json_schemas,
     poses_in_frame,
 )
+from dgmm.odometry import OdometryFrame, Trajectory
+from dgmm.registration import Registration, RigidTrial, register_p2d
 
 RERUN_CLI = str(Path(sys.executable).parent / "rerun")  # installed with rerun-sdk beside the interpreter
 
-# Required fields of Foxglove's published JSON schemas (foxglove-sdk schemas/jsonschema/SceneUpdate.json).
-FOXGLOVE_SCENE_UPDATE_FIELDS = {"deletions", "entities"}
-FOXGLOVE_SCENE_ENTITY_FIELDS = {"timestamp", "frame_id", "id", "lifetime", "frame_locked", "metadata", "arrows",
-                                "cubes", "spheres", "cylinders", "lines", "triangles", "texts", "models"}
-FOXGLOVE_SPHERE_FIELDS = {"pose", "size", "color"}
 
 
 def quaternion_matrix(q):
@@ -54,12 +59,40 @@ def blobs(seed=0, n_per_blob=150):
     return np.concatenate([c + rng.normal(size=(n_per_blob, 3)) @ rng.normal(size=(3, 3)) for c in centres])
 
 
+class JsonDecoderFactory(DecoderFactory):
+    """mcap decoder of JSON messages (mcap ships none)."""
+
+    def decoder_for(self, message_encoding, schema):
+        return json.loads if message_encoding == "json" else None
+
+
 def read_mcap(path):
-    """Messages of an MCAP file as a list of (topic, schema, decoded message, log_time)."""
+    """Messages of an MCAP file as a list of (topic, schema, decoded message, log_time): protobuf messages decoded
+    by mcap-protobuf-support from the file's own schema, JSON messages as dicts."""
     with open(path, "rb") as stream:
-        reader = make_reader(stream)
-        return [(channel.topic, schema, json.loads(message.data), message.log_time)
-                for schema, channel, message in reader.iter_messages(log_time_order=False)]
+        reader = make_reader(stream, decoder_factories=[ProtobufDecoderFactory(), JsonDecoderFactory()])
+        return [(channel.topic, schema, decoded, message.log_time)
+                for schema, channel, message, decoded in reader.iter_decoded_messages(log_time_order=False)]
+
+
+def read_blueprint(path):
+    """The blueprint of an .rrd file: (timeline of the time panel, {view name: (kind, origin, contents)})."""
+    reader = RrdReader(path)
+    (store,) = reader.blueprints()
+    rows = {}
+    for chunk in reader.store(store=store).stream().to_chunks():
+        for row in chunk.to_record_batch().to_pylist():
+            rows.setdefault(chunk.entity_path, {}).update({k: v for k, v in row.items() if v is not None})
+    views = {row["ViewBlueprint:display_name"][0]: (row["ViewBlueprint:class_identifier"][0],
+                                                    row["ViewBlueprint:space_origin"][0],
+                                                    rows[f"{entity}/ViewContents"]["ViewContents:query"])
+             for entity, row in rows.items() if "ViewBlueprint:display_name" in row}
+    return rows["/time_panel"]["TimePanelBlueprint:timeline"][0], views
+
+
+def xyz(vector, keys="xyz"):
+    """The fields ``keys`` of a protobuf vector, quaternion or colour, as an array."""
+    return np.array([getattr(vector, key) for key in keys])
 
 
 def read_rrd(path, entity):
@@ -133,11 +166,15 @@ def test_fit_recorder_mcap_reads_back(tmp_path):
     messages = read_mcap(mcap_path)
 
     for _, schema, message, _ in messages:
-        assert schema.encoding == "jsonschema"
-        schema_json = json.loads(schema.data)
-        jsonschema.Draft202012Validator.check_schema(schema_json)
-        jsonschema.validate(message, schema_json)
-        assert schema_json["title"] == schema.name
+        if schema.encoding == "protobuf":  # the maintained package's schema, under its well-known name
+            assert schema.name == type(message).DESCRIPTOR.full_name == SceneUpdate.DESCRIPTOR.full_name
+            assert schema.data == build_file_descriptor_set(SceneUpdate).SerializeToString()
+        else:
+            assert schema.encoding == "jsonschema"
+            schema_json = json.loads(schema.data)
+            jsonschema.Draft202012Validator.check_schema(schema_json)
+            jsonschema.validate(message, schema_json)
+            assert schema_json["title"] == schema.name and schema.name.startswith("dgmm.")
     log_times = [log_time for *_, log_time in messages]
     assert log_times == sorted(set(log_times))
 
@@ -152,22 +189,25 @@ def test_fit_recorder_mcap_reads_back(tmp_path):
         seconds = [m["seconds"] for m in mine]
         assert seconds == sorted(seconds) and seconds[0] >= 0
 
-    scenes = [(schema.name, m) for topic, schema, m, _ in messages if topic == "/fit/mixture"]
-    assert [name for name, _ in scenes] == ["foxglove.SceneUpdate"] * len(seeds)
-    for (_, scene), seed, model in zip(scenes, seeds, models):
-        assert FOXGLOVE_SCENE_UPDATE_FIELDS <= scene.keys()
-        (entity,) = scene["entities"]
-        assert FOXGLOVE_SCENE_ENTITY_FIELDS <= entity.keys()
-        assert entity["id"] == f"seed-{seed}"
-        n_sigma = float(dict((kv["key"], kv["value"]) for kv in entity["metadata"])["n_sigma"])
-        assert len(entity["spheres"]) == 3
-        for sphere, mean, covariance in zip(entity["spheres"], model.means_, model.covariances_):
-            assert FOXGLOVE_SPHERE_FIELDS <= sphere.keys()
-            pose = sphere["pose"]
-            np.testing.assert_array_equal([pose["position"][k] for k in "xyz"], mean)
-            quaternion = [pose["orientation"][k] for k in "xyzw"]
-            half_sizes = np.array([sphere["size"][k] for k in "xyz"]) / 2
-            check_ellipsoid(covariance, quaternion, half_sizes, n_sigma)
+    scenes = [(schema.name, m, log_time) for topic, schema, m, log_time in messages if topic == "/fit/mixture"]
+    assert [name for name, *_ in scenes] == ["foxglove.SceneUpdate"] * len(seeds)
+    for (_, scene, log_time), seed, model in zip(scenes, seeds, models):
+        (entity,) = scene.entities
+        assert entity.id == f"seed-{seed}" and entity.frame_id == "world"
+        assert entity.timestamp.seconds * 10**9 + entity.timestamp.nanos == log_time
+        metadata = {kv.key: kv.value for kv in entity.metadata}
+        assert float(metadata["bound"]) == model.history_[-1]
+        n_sigma = float(metadata["n_sigma"])
+        assert len(entity.spheres) == 3
+        for sphere, mean, covariance in zip(entity.spheres, model.means_, model.covariances_):
+            np.testing.assert_array_equal(xyz(sphere.pose.position), mean)
+            check_ellipsoid(covariance, xyz(sphere.pose.orientation, "xyzw"), xyz(sphere.size) / 2, n_sigma)
+
+
+def test_no_hand_written_foxglove_schema_remains():
+    """dgmm's JSON schemas are its own messages; every Foxglove type comes from the maintained package."""
+    titles = [value["title"] for name, value in vars(json_schemas).items() if name.endswith("_SCHEMA")]
+    assert titles and all(title.startswith("dgmm.") for title in titles)
 
 
 def test_same_fit_gives_same_mcap_bytes(tmp_path):
@@ -184,6 +224,11 @@ def test_fit_recorder_rrd_replays_first_seed_on_mesh(tmp_path):
 
     result = subprocess.run([RERUN_CLI, "rrd", "verify", str(rrd_path)], capture_output=True, text=True)
     assert result.returncode == 0, result.stderr
+
+    timeline, views = read_blueprint(rrd_path)
+    assert timeline == "iteration"
+    assert views == {"input and mixture": ("3D", "/", ["/input", "/mixture"]),
+                     "bound": ("TimeSeries", "/bound", ["$origin/**"])}
 
     mesh_columns = read_rrd(rrd_path, "/input")
     np.testing.assert_allclose(mesh_columns["Mesh3D:vertex_positions"][0], mesh.vertices, rtol=1e-6)
@@ -236,20 +281,83 @@ def test_poses_in_frame_through_mcap_writer(tmp_path):
     translations = rng.normal(size=(5, 3))
     with McapWriter(tmp_path / "poses.mcap") as out:
         for name, (r, t) in {"true": (rotations, translations), "estimated": (rotations[::-1], translations)}.items():
-            out.write(f"/register/{name}", poses_in_frame(r, t, log_time_ns=out.next_log_time()),
-                      POSES_IN_FRAME_SCHEMA)
+            out.write(f"/register/{name}", poses_in_frame(r, t, log_time_ns=out.next_log_time()))
         with pytest.raises(InputError, match="carries"):
             out.write("/register/true", {"seed": 0}, {"title": "other.Message"})
+        with pytest.raises(InputError, match="its own schema"):
+            out.write("/register/other", poses_in_frame(r, t, log_time_ns=0), {"title": "other.Message"})
         with pytest.raises(ValueError):
             out.write("/register/nan", {"x": float("nan")}, {"title": "other.Message"})
 
     messages = read_mcap(tmp_path / "poses.mcap")
     assert [topic for topic, *_ in messages] == ["/register/true", "/register/estimated"]
     topic, schema, message, log_time = messages[0]
-    assert schema.name == "foxglove.PosesInFrame"
-    jsonschema.validate(message, json.loads(schema.data))
-    assert message["timestamp"] == {"sec": 0, "nsec": 0}
-    for pose, rotation, translation in zip(message["poses"], rotations, translations):
-        np.testing.assert_array_equal([pose["position"][k] for k in "xyz"], translation)
-        np.testing.assert_allclose(quaternion_matrix([pose["orientation"][k] for k in "xyzw"]), rotation,
-                                   atol=1e-12)
+    assert schema.name == "foxglove.PosesInFrame" and schema.encoding == "protobuf"
+    assert schema.data == build_file_descriptor_set(PosesInFrame).SerializeToString()
+    assert (message.timestamp.seconds, message.timestamp.nanos, message.frame_id) == (0, 0, "world")
+    assert len(message.poses) == 5
+    for pose, rotation, translation in zip(message.poses, rotations, translations):
+        np.testing.assert_array_equal(xyz(pose.position), translation)
+        np.testing.assert_allclose(quaternion_matrix(xyz(pose.orientation, "xyzw")), rotation, atol=1e-12)
+
+
+def test_registration_recorder_writes_poses_and_a_blueprint_per_recorded_trial(tmp_path):
+    source = blobs(seed=9, n_per_blob=40)
+    mixture = GaussianMixture(3, max_iter=20, random_state=0).fit(source)
+    rotation = Rotation.from_euler("xyz", [5.0, -4.0, 3.0], degrees=True).as_matrix()
+    trial = RigidTrial(rotation, np.array([0.1, -0.2, 0.05]), source.mean(axis=0))
+    mcap_path, rrd_path = tmp_path / "trials.mcap", tmp_path / "trials.rrd"
+    with RegistrationRecorder(mcap_path, rrd_path, mixture=mixture, recorded_trials={0}) as recorder:
+        for index in (0, 1):
+            callback = recorder.begin_trial(index, trial, source)
+            assert (callback is None) == (index == 1)
+            result = register_p2d(trial.apply(source), mixture, callback=callback)
+            recorder.end_trial(result, 0.0, 0.0)
+
+    timeline, views = read_blueprint(rrd_path)
+    assert timeline == "iteration"
+    assert views == {"trial 0": ("3D", "/", ["/mixture", "/trial-0/**", "- /trial-0/objective"]),
+                     "objective": ("TimeSeries", "/", ["/trial-0/objective"])}
+    objective = read_rrd(rrd_path, "/trial-0/objective")
+    assert objective["iteration"] == list(range(1, result.iterations + 1))
+    assert not read_rrd(rrd_path, "/trial-1/source")
+
+    messages = read_mcap(mcap_path)
+    (scene,) = [m for topic, _, m, _ in messages if topic == "/registration/mixture"]
+    np.testing.assert_array_equal([xyz(s.pose.position) for s in scene.entities[0].spheres], mixture.means_)
+    true_poses = [m for topic, _, m, _ in messages if topic == "/registration/true_pose"]
+    assert [type(m).DESCRIPTOR.full_name for m in true_poses] == ["foxglove.PosesInFrame"] * 2
+    (pose,) = true_poses[0].poses  # the pose of the moved source: R and c + t - R c
+    np.testing.assert_allclose(quaternion_matrix(xyz(pose.orientation, "xyzw")), rotation, atol=1e-12)
+    np.testing.assert_allclose(xyz(pose.position), trial.apply(np.zeros((1, 3)))[0], atol=1e-12)
+
+
+def test_odometry_recorder_writes_trajectories_and_its_blueprint(tmp_path):
+    n_frames = 3
+    rotations = Rotation.from_euler("z", np.arange(n_frames)[:, None] * 10.0, degrees=True).as_matrix()
+    translations = np.arange(n_frames)[:, None] * np.array([0.1, 0.0, 0.02])
+    truth = Trajectory(np.arange(n_frames) * 0.5 + 100.0, rotations, translations)
+    model = GaussianMixture(3, max_iter=5, random_state=0).fit(blobs(seed=3, n_per_blob=30))
+    mcap_path, rrd_path = tmp_path / "odometry.mcap", tmp_path / "odometry.rrd"
+    with OdometryRecorder(mcap_path, rrd_path, groundtruth=truth) as recorder:
+        for index in range(n_frames):
+            registration = None if index == 0 else Registration(np.eye(3), np.zeros(3), 4, 0.01, 1.5, True, "d2d")
+            recorder(OdometryFrame(index, float(truth.timestamps[index]), rotations[index], translations[index],
+                                   model, 0.02, registration))
+        recorder.finish(truth)
+
+    timeline, views = read_blueprint(rrd_path)
+    assert timeline == "frame"
+    assert views == {"camera path": ("3D", "/world", ["$origin/**"]),
+                     "current frame's model": ("3D", "/world/camera", ["/world/camera/model"]),
+                     "seconds per frame": ("TimeSeries", "/seconds", ["$origin/**"])}
+    assert sorted(read_rrd(rrd_path, "/world/camera/model")["frame"]) == list(range(n_frames))
+    assert sorted(read_rrd(rrd_path, "/seconds/model")["frame"]) == list(range(n_frames))
+
+    by_topic = {topic: (message, log_time) for topic, _, message, log_time in read_mcap(mcap_path)}
+    estimated, log_time = by_topic["/odometry/estimated"]
+    assert estimated.frame_id == "odometry" and log_time == int(truth.timestamps[-1] * 1e9)
+    np.testing.assert_array_equal([xyz(p.position) for p in estimated.poses], translations)
+    groundtruth, _ = by_topic["/odometry/groundtruth"]
+    for pose, rotation in zip(groundtruth.poses, rotations):
+        np.testing.assert_allclose(quaternion_matrix(xyz(pose.orientation, "xyzw")), rotation, atol=1e-12)

@@ -15,7 +15,7 @@ import trimesh
 from scipy.spatial.transform import Rotation
 
 from dgmm.tables import read_csv
-from tests.test_recording import read_mcap, read_rrd
+from tests.test_recording import read_blueprint, read_mcap, read_rrd, xyz
 from tests.workflow import RERUN, TEST_CONFIG, run_snakemake
 
 REG = TEST_CONFIG["registration"]
@@ -52,14 +52,10 @@ def chunk_folders(results):
     return sorted(results.glob("registration/*/*/*/c*"))
 
 
-def quaternion_xyzw(orientation):
-    return np.array([orientation[k] for k in "xyzw"])
-
-
 def pose(message):
     """(quaternion (x, y, z, w), position) of the single pose of a PosesInFrame message."""
-    (single,) = message["poses"]
-    return quaternion_xyzw(single["orientation"]), np.array([single["position"][k] for k in "xyz"])
+    (single,) = message.poses
+    return xyz(single.orientation, "xyzw"), xyz(single.position)
 
 
 def quaternion_product(a, b):
@@ -177,10 +173,15 @@ def test_every_rrd_verifies_and_shows_the_first_trials_moving(workdir, table):
     verify = subprocess.run([str(RERUN), "rrd", "verify", *map(str, recordings)], capture_output=True, text=True)
     assert verify.returncode == 0, verify.stderr
     iterations = {(r["model"], r["mesh"], r["method"], int(r["trial"])): int(r["iterations"]) for r in table}
+    for gmm in gmms:  # the P2D methods' fit
+        assert read_blueprint(gmm.parent / "fit.rrd")[0] == "iteration"
     for folder in chunk_folders(results):
         model, mesh, method = folder.parts[-4:-1]
         first = REG["trials_per_chunk"] * int(folder.name[1:])
         recorded = range(first, first + REG["recorded_trials"])
+        timeline, views = read_blueprint(folder / "trials.rrd")
+        assert timeline == "iteration" and views["objective"][2] == [f"/trial-{trial}/objective" for trial in recorded]
+        assert {name for name in views if name != "objective"} == {f"trial {trial}" for trial in recorded}
         for trial in recorded:
             moving = read_rrd(folder / "trials.rrd", f"/trial-{trial}/source")
             # Iteration 0 is the trial's start, then one row per iteration of the method.
