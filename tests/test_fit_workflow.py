@@ -65,11 +65,15 @@ def test_every_recording_reads_back_and_matches_the_table(sweep):
             assert bounds[-1] == float(row["bound"])
         verify = subprocess.run([str(RERUN), "rrd", "verify", str(job / "fit.rrd")], capture_output=True, text=True)
         assert verify.returncode == 0, verify.stderr
-        assert read_blueprint(job / "fit.rrd")[0] == "iteration"
         mixture = read_rrd(job / "fit.rrd", "/mixture")
         n_iter = int(seeds[0]["n_iter"])
         assert mixture["iteration"] == list(range(1, n_iter + 1))
         assert all(len(centers) == int(seeds[0]["K"]) for centers in mixture["Ellipsoids3D:centers"])
+    recordings = sorted(sweep.rglob("*.rrd"))
+    assert len(recordings) > len(jobs)  # the fits and Fig 2's
+    for path in recordings:  # each opens on its blueprint
+        timeline, views = read_blueprint(path)
+        assert timeline == "iteration" and views["bound"] == ("TimeSeries", "/bound", ["$origin/**"]), path
 
 
 def test_fig2_table_has_every_expression(sweep):

@@ -25,6 +25,7 @@ from scipy.spatial.transform import Rotation
 
 from dgmm.errors import InputError
 from dgmm.mixture import GaussianMixture
+from dgmm.odometry import OdometryFrame
 from dgmm.recording import (
     DEFAULT_N_SIGMA,
     FitRecorder,
@@ -35,8 +36,8 @@ from dgmm.recording import (
     json_schemas,
     poses_in_frame,
 )
-from dgmm.odometry import OdometryFrame, Trajectory
 from dgmm.registration import Registration, RigidTrial, register_p2d
+from dgmm.tum import Trajectory
 
 RERUN_CLI = str(Path(sys.executable).parent / "rerun")  # installed with rerun-sdk beside the interpreter
 
