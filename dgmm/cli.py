@@ -16,16 +16,13 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
-import trimesh
-from tqdm import tqdm
-
 from dgmm import __version__
-from dgmm.data import load_mesh, load_points, save_ply
 from dgmm.errors import DataError, DgmmError, InputError
-from dgmm.mixture import INITS, VARIANTS, GaussianMixture
-from dgmm.model_io import load_model, save_model
 from dgmm.primitives import Primitives, as_primitives
-from dgmm.registration import register_cpd, register_icp, register_p2d
+from dgmm.variants import INITS, VARIANTS
+
+# File readers (trimesh, scipy), the estimator (scikit-learn), registration and the recorders (rerun, mcap) are
+# imported by the commands that use them, so that `dgmm --help` and argument errors answer at once.
 
 BAD_INPUT = 2
 """Exit status for bad usage (argparse's own) and for bad input: any :class:`~dgmm.errors.DgmmError`."""
@@ -53,12 +50,25 @@ def _require_file(path):
 
 def _read_mesh(path):
     """The triangles of a mesh file as a ``trimesh.Trimesh`` (fitted as exact triangles, recorded as a mesh)."""
+    import trimesh
+
+    from dgmm.data import load_mesh
+
     vertices, faces = load_mesh(path)
     return trimesh.Trimesh(vertices, faces, process=False)
 
 
+def _read_points(path):
+    """The vertices (or points) of a file as an ``(n, 3)`` array."""
+    from dgmm.data import load_points
+
+    return load_points(path)
+
+
 def _read_approx(path):
     """The triangles of a mesh file as area-weighted centroids: the paper's approximation (eq. 5)."""
+    from dgmm.data import load_mesh
+
     return Primitives.from_mesh(*load_mesh(path)).without_covariances()
 
 
@@ -66,7 +76,7 @@ def _read_approx(path):
 INPUT_KINDS = {
     "mesh": (_read_mesh, "exact triangles: centroid, area and covariance of each face"),
     "approx": (_read_approx, "area-weighted face centroids, no triangle covariance (the paper's approximation)"),
-    "points": (load_points, "the file's vertices (or points) as points"),
+    "points": (_read_points, "the file's vertices (or points) as points"),
 }
 
 
@@ -97,7 +107,7 @@ def read_input(path, kind=None):
         return "mesh", _read_mesh(path)
     except DataError as mesh_error:
         try:
-            return "points", load_points(path)
+            return "points", _read_points(path)
         except DataError:
             raise mesh_error from None
 
@@ -108,6 +118,8 @@ def read_input(path, kind=None):
 
 def _progress_bar(total):
     """A tqdm bar over EM iterations, on stderr, shown only on a terminal and only for fits that take a while."""
+    from tqdm import tqdm
+
     return tqdm(total=total, desc="EM", unit="it", disable=not sys.stderr.isatty(), delay=PROGRESS_DELAY,
                 leave=False)
 
@@ -129,7 +141,6 @@ def _open_recorder(stack, mcap, rrd, params, data, seed):
     finish : callable(model) or None
         To call with the fitted model before ``stack`` closes.
     """
-    # Imported here: rerun and mcap add a third to the start-up time of every other command.
     from dgmm.recording import FitRecorder, RerunRecorder
 
     if mcap is not None:
@@ -155,6 +166,9 @@ def _chain(*callbacks):
 
 def _fit(args):
     """Fit a mixture to ``args.input``, save it to ``args.output``, optionally record the fit."""
+    from dgmm.mixture import GaussianMixture
+    from dgmm.model_io import save_model
+
     kind, data = read_input(args.input, args.kind)
     model = GaussianMixture(args.k, init=args.init, max_iter=args.iterations, random_state=args.seed,
                             variant=args.variant)
@@ -200,6 +214,8 @@ def _fit_arguments(parser):
 
 def _score(args):
     """Print the mean log-likelihood of points, or the size-weighted triangle bound of a mesh (eq. 11)."""
+    from dgmm.model_io import load_model
+
     model, _ = load_model(args.model)
     _, data = read_input(args.input, args.kind)
     print(repr(model.score_primitives(data)))
@@ -214,14 +230,22 @@ def _score_arguments(parser):
 
 # method -> function(source points, model, target thunk) -> Registration; only point-to-point methods call target
 _METHODS = {
-    "p2d": lambda source, model, target: register_p2d(source, model),
-    "icp": lambda source, model, target: register_icp(source, target()),
-    "cpd": lambda source, model, target: register_cpd(source, target()),
+    "p2d": lambda source, model, target: _registration().register_p2d(source, model),
+    "icp": lambda source, model, target: _registration().register_icp(source, target()),
+    "cpd": lambda source, model, target: _registration().register_cpd(source, target()),
 }
+
+
+def _registration():
+    """:mod:`dgmm.registration`, imported when a command registers."""
+    import dgmm.registration
+    return dgmm.registration
 
 
 def _register(args):
     """Register points to a model and print the pose as JSON."""
+    from dgmm.model_io import load_model
+
     model, _ = load_model(args.model)
     _, source = read_input(args.points, "points")
     if args.method == "p2d" and (args.target is not None or args.samples is not None):
@@ -267,6 +291,9 @@ def _register_arguments(parser):
 
 def _sample(args):
     """Draw points from a model and write them as a PLY point cloud."""
+    from dgmm.data import save_ply
+    from dgmm.model_io import load_model
+
     model, _ = load_model(args.model)
     model.random_state = args.seed
     points, _ = model.sample(args.n)

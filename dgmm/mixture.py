@@ -15,7 +15,8 @@ The M-step needs of the responsibilities only ``respᵀ · moments`` (n_componen
 over blocks of primitives (``dgmm.em_blocks``): memory is O(n_prims × 11 + block × n_components), and blocks
 may run on several threads without changing a bit of the result.
 
-Read top to bottom: variants and checks, moment features, E-step, M-step, initialisation, estimator.
+Read top to bottom: checks, moment features, E-step, M-step, initialisation, estimator (the EM variants are in
+:mod:`dgmm.variants`).
 Conventions follow ``sklearn.mixture.GaussianMixture`` (full covariances): ``precisions_cholesky_`` is upper
 triangular ``U`` with precision ``U Uᵀ``; ``reg_covar`` on the diagonal, absolute, in the data's squared units;
 ``10 eps`` on component masses.
@@ -38,6 +39,7 @@ from sklearn.cluster import KMeans
 from dgmm.em_blocks import DEFAULT_MEMORY_LIMIT, BlockPass
 from dgmm.errors import FitError, InputError
 from dgmm.primitives import Primitives, as_primitives
+from dgmm.variants import INITS, VARIANTS
 
 _LOG_2PI = np.log(2.0 * np.pi)
 _EPS = 10.0 * np.finfo(np.float64).eps
@@ -53,24 +55,6 @@ _LOG_FLOOR = -300.0
 # RMS radius of the primitives about their centre that a fit accepts: beyond, covariances in squared data units
 # are not normal float64 numbers (1e-152² = 1e-304; 1e152² = 1e304, max 1.8e308).
 _RADIUS_RANGE = (1e-152, 1e152)
-
-
-def _textbook(sizes):
-    """Textbook EM: the E-step is unscaled and sizes weight the M-step (rescaled to mean 1, so that masses
-    count primitives whatever the units, as scikit-learn's ``10 eps`` on masses assumes)."""
-    return np.ones_like(sizes), sizes / sizes.mean()
-
-
-def _authors(sizes):
-    """leonidk/direct_gmm's modified scikit-learn 0.20: the E-step's Mahalanobis-plus-trace term is scaled by
-    ``alpha_p / min(alpha)`` and the M-step is not weighted by size (every primitive counts once)."""
-    present = sizes > 0
-    return sizes / sizes[present].min(), present.astype(np.float64)
-
-
-# variant -> function(sizes) -> (E-step scale per primitive, M-step weight per primitive)
-VARIANTS = {"textbook": _textbook, "authors": _authors}
-INITS = ("kmeans", "random")
 
 
 def _is_int(low):

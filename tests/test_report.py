@@ -14,8 +14,10 @@ from matplotlib.figure import Figure
 
 from dgmm.data import load_mesh, save_ply
 from dgmm.report import claims, figure_names
+from dgmm.report.build import figure_of, summary_rows
 from dgmm.report.document import markdown_table, to_html, to_markdown
 from dgmm.report.tables import fig2_bars, likelihood_means, registration_errors, table1
+from dgmm.shared_responsibility import PER_POINT_MEASURE
 from dgmm.tables import read_csv, write_csv
 from tests.conftest import SHARED_DATA
 
@@ -55,6 +57,7 @@ FIG2_ROWS = [
     {"measure": "points", "n": "10", "draw": "0", "bound": "8.5", "expected": "8.0"},
     {"measure": "points", "n": "10", "draw": "1", "bound": "6.5", "expected": "6.0"},
     {"measure": "all points", "n": "1000", "draw": "0", "bound": "7.3", "expected": "7.05"},
+    {"measure": PER_POINT_MEASURE, "n": "64", "draw": "0", "bound": "7.29", "expected": "7.04"},  # not a bar
 ]
 
 
@@ -108,6 +111,20 @@ def test_fig2_claim_uses_the_papers_quantity():
     claim = claims.bound_equals_dense(claims.Measurements(fig2=FIG2_ROWS))
     assert claim.verdict == "reproduced"
     assert "-0.050" in claim.evidence and "+0.200" in claim.evidence
+    assert claim.ours == "triangle − all points -0.050 nat" and claim.why == ""
+
+
+def test_fig2_claim_says_how_much_of_the_gap_the_shared_responsibility_is():
+    rows = [dict(row) for row in FIG2_ROWS]
+    rows[0]["expected"] = "6.75"  # triangle − all points: −0.3, partly
+    claim = claims.bound_equals_dense(claims.Measurements(fig2=rows))
+    assert claim.verdict == "partly"
+    # per point 7.04 − triangle 6.75 = 0.29 of the 0.30 gap: 97%
+    assert "costs it 0.290 nat" in claim.why and "scores 7.040 (all points 7.050, triangle 6.750)" in claim.why
+    assert "97% of the difference" in claim.why
+    without = claims.bound_equals_dense(claims.Measurements(fig2=[row for row in rows
+                                                                   if row["measure"] != PER_POINT_MEASURE]))
+    assert "no per-point row" in without.why
 
 
 def test_fig3_values_claim_takes_the_variant_closer_to_the_paper():
@@ -158,6 +175,9 @@ def test_robustness_claim_is_partly_when_only_the_authors_em_is_robust():
     claim = claims.mesh_robust_to_init(claims.Measurements(means=means_of(cells)))
     assert claim.verdict == "partly"
     assert "textbook EM: 0 of 2" in claim.evidence and "authors EM: 2 of 2" in claim.evidence
+    assert claim.why == ("K-means ends a median +1.50 nat (0 of 2 within 0.25) above random starts with textbook "
+                         "EM and +0.10 nat (2 of 2 within 0.25) with the authors' E-step area scaling: the "
+                         "robustness appears only with that scaling.")
     for k in (25, 100):
         cells["res4-exact", "textbook", "random", k] = 7.8
     assert claims.mesh_robust_to_init(claims.Measurements(means=means_of(cells))).verdict == "reproduced"
@@ -169,6 +189,7 @@ def test_registration_claims():
     errors = registration_errors([{key: str(value) for key, value in row.items()} for row in rows])
     claim = claims.mesh_registers_best(claims.Measurements(errors=errors))
     assert "wins 3 of 4" in claim.evidence and claim.verdict == "partly"  # ICP's translation is better
+    assert claim.why == "Where it fails: icp's mean translation error is lower (0.05 vs 0.1)."
     assert claims.mesh_registers_best(claims.Measurements()).verdict == "pending"
     table = [{"model": "bunny", "rot_mesh": 20.0, "rot_points": 50.0, "trans_mesh": 120.0, "trans_points": 100.0,
               "ll_mesh": 8.0, "ll_points": 7.0}]
@@ -184,6 +205,24 @@ def test_figures_follow_the_configured_inputs():
         ["fig1", "fig2", "fig3", "fig4", "fig5", "fig7"]
     assert figure_names(["likelihood", "fig2", "res4"], ["res4-exact"]) == ["fig1", "fig2", "fig3"]
     assert figure_names(everything, ["res4-exact", "bunny/quadric1000"]) == ["fig1", "fig2", "fig3", "fig7"]
+
+
+def test_summary_rows_link_each_claim_to_its_details_and_figure():
+    evaluated = [claims.Claim("Fig 2: a", "rule", "evidence", "reproduced", "1", "2", "ignored when reproduced"),
+                 claims.Claim("Figs 3, 4: b", "rule", "evidence", "partly", why="Because of c."),
+                 claims.Claim("Table 1: d", "rule", "evidence", "not reproduced", "3", "4", "Because of e.")]
+    assert figure_of(evaluated[1]) == ("Fig 3", "fig3") and figure_of(evaluated[2]) == ("Table 1", "table1")
+    assert summary_rows(evaluated) == [
+        ["[Fig 2: a](#claim-1)", "{{reproduced}}", "1", "2", "[Fig 2](#fig2)"],
+        ["[Figs 3, 4: b](#claim-2)\nBecause of c.", "{{partly}}", "–", "–", "[Fig 3](#fig3)"],
+        ["[Table 1: d](#claim-3)\nBecause of e.", "{{not reproduced}}", "3", "4", "[Table 1](#table1)"]]
+    page = to_html([("table", ["claim", "verdict"], [row[:2] for row in summary_rows(evaluated)], "summary")], {}, "T")
+    assert ('<td><a href="#claim-2">Figs 3, 4: b</a><br>Because of c.</td>'
+            '<td><span class="badge partly">partly</span></td>') in page
+    assert '<span class="badge not-reproduced">not reproduced</span>' in page
+    assert markdown_table(["v"], [["{{partly}}"]]) == "| v |\n|---|\n| {{partly}} |"
+    assert to_markdown([("table", ["v"], [["{{partly}}", "a|b\nc"]])]) == \
+        "| v |\n|---|\n| 🟡 **partly** | a\\|b<br>c |\n"
 
 
 def test_markdown_and_html_rendering():
@@ -251,7 +290,7 @@ def run_report(workdir, config):
 
 
 @pytest.fixture(scope="module")
-def built(tmp_path_factory):
+def built(tmp_path_factory):  # the tests using it are marked slow: a real Snakemake run
     """The report rule run twice on synthetic tables: (report folder, bytes of every file of the first run, figure
     names). Fig 6 is expected when tests/config.yaml configures the odometry stage."""
     workdir = tmp_path_factory.mktemp("report")
@@ -268,6 +307,7 @@ def built(tmp_path_factory):
     return out, first, FIGURES + ("fig6",) * ("odometry" in config)
 
 
+@pytest.mark.slow
 def test_report_writes_every_output(built):
     out, first, drawn = built
     names = {str(path) for path in first}
@@ -277,14 +317,22 @@ def test_report_writes_every_output(built):
     assert ("Pending: waits for the odometry stage" in markdown) == ("fig6" not in drawn)
     assert all(f"({figure})" in markdown for figure in figures)
     assert len(re.findall(r"— \*\*(reproduced|partly|not reproduced|pending)\*\*", markdown)) == len(claims.CLAIMS)
+    # The summary table opens the report: one row per claim, each not reproduced saying why.
+    html_page = (out / "report.html").read_text()
+    summary = html_page[html_page.index("<h1>"):html_page.index('<h2 id="claims">')]
+    rows = re.findall(r"<tr><td>(.*?)</td><td><span class=\"badge ([\w-]+)\">", summary)
+    assert len(rows) == len(claims.CLAIMS)
+    assert all(("<br>" in cell) == (verdict != "reproduced") for cell, verdict in rows), rows
 
 
+@pytest.mark.slow
 def test_regenerated_report_is_byte_identical(built):
     out, first, _ = built
     for path, data in first.items():
         assert (out / path).read_bytes() == data, path
 
 
+@pytest.mark.slow
 def test_table1_has_five_models_with_finite_numbers(built):
     out, _, _ = built
     rows = read_csv(out / "table1.csv")
@@ -294,21 +342,27 @@ def test_table1_has_five_models_with_finite_numbers(built):
         assert (float(row["ll_mesh"]), float(row["ll_points"])) == (8.0 - m, 7.0 - m)
 
 
+@pytest.mark.slow  # a browser
 @pytest.mark.skipif(CHROMIUM is None, reason="Chromium is not installed (CI installs Debian's `chromium`; "
                                              "`apt-get install chromium` to run this test)")
-def test_every_figure_loads_in_headless_chromium(built, tmp_path):
+def test_every_figure_loads_and_the_verdicts_show_in_the_first_screen_of_headless_chromium(built, tmp_path):
     out, _, drawn = built
     page = (out / "report.html").read_text()
     n_figures = page.count("<img ")
-    # A broken image as a control, then a script marking every image once the page has loaded.
-    probe = ('<img id="control" src="data:image/png;base64,AAAA"><script>window.addEventListener("load", () => '
-             '{for (const img of document.images) img.dataset.ok = img.naturalWidth > 0 ? "yes" : "no";});'
+    # A broken image as a control, then a script that marks, once the page has loaded, every image (drawn or
+    # not), every verdict badge (its bottom edge, in CSS pixels from the top of the page area) and the size of
+    # the page area.
+    probe = ('<img id="control" src="data:image/png;base64,AAAA"><script>window.addEventListener("load", () => {'
+             'for (const img of document.images) img.dataset.ok = img.naturalWidth > 0 ? "yes" : "no";'
+             'for (const badge of document.querySelectorAll(".badge")) '
+             'badge.dataset.bottom = Math.ceil(badge.getBoundingClientRect().bottom);'
+             'document.body.dataset.viewport = innerWidth + "x" + innerHeight;});'
              "</script></body>")
     (tmp_path / "page.html").write_text(page.replace("</body>", probe))
     run = subprocess.run([CHROMIUM, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
                           "--no-first-run", "--disable-background-networking", "--disable-component-update",
                           "--disable-sync", f"--user-data-dir={tmp_path / 'profile'}", "--virtual-time-budget=10000",
-                          "--dump-dom", (tmp_path / "page.html").as_uri()],
+                          "--window-size=1280,800", "--dump-dom", (tmp_path / "page.html").as_uri()],
                          capture_output=True, text=True, timeout=120, check=False)
     assert run.returncode == 0, run.stderr[-2000:]
     tags = re.findall(r"<img[^>]*>", run.stdout)
@@ -317,6 +371,11 @@ def test_every_figure_loads_in_headless_chromium(built, tmp_path):
     assert len(tags) == n_figures + 1 == len(drawn) + 1
     assert marks.pop("control") == "no"
     assert marks == {name: "yes" for name in drawn}
+    # The page area of a 1280×800 window (its height less the browser's own bars) holds every verdict.
+    width, height = map(int, re.search(r'data-viewport="(\d+)x(\d+)"', run.stdout).groups())
+    assert width == 1280 and 600 < height <= 800
+    bottoms = [int(value) for value in re.findall(r'class="badge [\w-]+" data-bottom="(\d+)"', run.stdout)]
+    assert len(bottoms) == len(claims.CLAIMS) and 0 < max(bottoms) <= height, (bottoms, height)
 
 
 def test_odometry_claim():

@@ -7,6 +7,7 @@ says it is pending. Outputs: ``report.html`` (self-contained), ``report.md``, ``
 """
 import io
 import math
+import re
 from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
@@ -193,30 +194,63 @@ TABLE1_HEADER = ["model", "likelihood points", "likelihood mesh", "rotation % IC
 
 
 def _claim_item(claim):
-    return f"**{claim.title}** — **{claim.verdict}**. Evidence: {claim.evidence} Rule: {claim.rule}."
+    why = f" Why: {claim.why}" if claim.why and claim.verdict != claims.REPRODUCED else ""
+    return f"**{claim.title}** — **{claim.verdict}**.{why} Evidence: {claim.evidence} Rule: {claim.rule}."
+
+
+def claim_anchor(index):
+    """Anchor of the ``index``-th claim's details."""
+    return f"claim-{index + 1}"
+
+
+def figure_of(claim):
+    """``(label, anchor)`` of the figure or table a claim is about, from its title ("Fig 2: ...", "Figs 3, 4:
+    ...", "Table 1: ..."): its first number."""
+    match = re.match(r"(Figs?|Table) (\d+)", claim.title)
+    if match is None:
+        return None
+    kind = "fig" if match[1].startswith("Fig") else "table"
+    return f"{kind.title()} {match[2]}", f"{kind}{match[2]}"
+
+
+SUMMARY_HEADER = ["claim (details) — why, when not reproduced", "verdict", "ours", "paper", "see"]
+
+
+def summary_rows(evaluated):
+    """One summary-table row per claim: title linked to its details (and why, when not reproduced), verdict
+    badge, the deciding number beside the paper's, link to its figure or table."""
+    rows = []
+    for index, claim in enumerate(evaluated):
+        why = f"\n{claim.why}" if claim.why and claim.verdict != claims.REPRODUCED else ""
+        figure = figure_of(claim)
+        rows.append([f"[{claim.title}](#{claim_anchor(index)}){why}", f"{{{{{claim.verdict}}}}}",
+                     claim.ours or "–", claim.paper or "–", f"[{figure[0]}](#{figure[1]})" if figure else "–"])
+    return rows
 
 
 def blocks(loaded, drawn):
     """The report's blocks (see :mod:`dgmm.report.document`), figures limited to the names in ``drawn``."""
     keys = set(loaded.paths)
     table1_rows = [_table1_cells(row) for row in loaded.table1]
+    evaluated = claims.evaluate(loaded.measurements())
     result = [
         ("h1", TITLE),
+        ("table", SUMMARY_HEADER, summary_rows(evaluated), "summary"),
+        ("h2", "Claims", "claims"),
         ("p", ("Our numbers beside those of Keselman & Hebert (2019), claim by claim, computed from the sweep's "
                "tables (results/tables). Likelihoods are mean log-likelihoods of Poisson-disk evaluation points, "
                "in nats (densities in m⁻³). Two EM variants are fitted to mesh inputs: textbook EM (paper eqs. "
                "11–13) and the authors' published code, whose E-step multiplies each triangle's Mahalanobis-plus-"
                "trace term by its area over the smallest area; the robustness claim is checked for both.")),
-        ("h2", "Claims"),
-        ("list", [_claim_item(claim) for claim in claims.evaluate(loaded.measurements())]),
-        ("h2", "Table 1: five models, ours (paper)"),
+        ("list", [_claim_item(claim) for claim in evaluated], [claim_anchor(i) for i in range(len(evaluated))]),
+        ("h2", "Table 1: five models, ours (paper)", "table1"),
         ("p", ("Quadric decimation to 1000 faces, K=100, k-means, textbook EM; likelihood of the points GMM "
                "(vertices) and the mesh GMM (triangles); registration errors as % of ICP's mean error. "
                "– : not measured yet.")),
         ("table", TABLE1_HEADER, table1_rows),
     ]
     for spec in FIGURES:
-        result.append(("h2", spec.title))
+        result.append(("h2", spec.title, spec.name))
         result.append(("figure", spec.name, spec.caption) if spec.name in drawn else
                       ("p", f"Pending: {_pending_reason(spec, keys)}"))
     return result

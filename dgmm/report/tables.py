@@ -1,7 +1,8 @@
 """The report's tables, computed from the sweep's tidy CSVs (rows are dicts of strings, as ``dgmm.tables`` reads).
 
 - ``likelihood.csv``: model, input, K, init, variant, seed, eval_ll, bound, n_iter (one row per fitted seed);
-- ``fig2.csv``: measure, n, draw, bound, expected (Fig 2's likelihood expressions of one fit);
+- ``fig2.csv``: measure, n, draw, bound, expected (Fig 2's likelihood expressions of one fit, and the triangles
+  scored with a responsibility per point: :mod:`dgmm.shared_responsibility`);
 - ``registration.csv``: model, mesh, method, trial, rotation_error_deg, translation_error_pct, iterations, ...
 
 Registration methods are named ``{mesh|points}-{kmeans|random}`` (P2D with a GMM fitted to the mesh or to its
@@ -13,6 +14,7 @@ from collections import defaultdict
 import numpy as np
 
 from dgmm.report import paper
+from dgmm.shared_responsibility import PER_POINT_MEASURE
 
 FIG2_EXPRESSIONS = ("triangle", "centroid", "area x centroid")
 TABLE1_MESH = "quadric1000"  # the registered mesh of Table 1 (the data stage's quadric decimation)
@@ -75,7 +77,7 @@ def fig2_bars(rows, column):
     for row in rows:
         if row["measure"] == "all points":
             reference = float(row[column])
-        else:
+        elif row["measure"] != PER_POINT_MEASURE:  # not a bar: the claims read it
             label = row["measure"] if row["measure"] in FIG2_EXPRESSIONS else f"{int(row['n']):,} points"
             draws[label].append(float(row[column]))
     bars = [(label, float(np.mean(values)), float(np.std(values))) for label, values in draws.items()]

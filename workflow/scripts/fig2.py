@@ -1,5 +1,6 @@
 """Job: Fig 2. Fit K components to dense random samples of a mesh, then compare likelihood expressions: the
-triangle bound, centroids, area × centroids, and n sampled points (several draws per n)."""
+triangle bound, centroids, area × centroids, the triangles with a responsibility per point, and n sampled points
+(several draws per n)."""
 import sys
 
 import trimesh
@@ -8,6 +9,7 @@ from threadpoolctl import threadpool_limits
 from dgmm import GaussianMixture, Primitives
 from dgmm.data import load_mesh
 from dgmm.recording import FitRecorder
+from dgmm.shared_responsibility import PER_POINT_MEASURE, SUBDIVISIONS, per_point_likelihoods
 from dgmm.sweep import expected_log_likelihood, job_seed, representation_likelihoods
 from dgmm.tables import write_csv
 
@@ -34,6 +36,9 @@ with threadpool_limits(smk.threads), FitRecorder(smk.output.mcap, smk.output.rrd
 
     rows = [{"measure": name, "n": "", "draw": 0, "bound": bound, "expected": expected}
             for name, (bound, expected) in representation_likelihoods(model, vertices, faces).items()]
+    bound, expected = per_point_likelihoods(model, vertices, faces)
+    rows.append({"measure": PER_POINT_MEASURE, "n": SUBDIVISIONS ** 2, "draw": 0, "bound": bound,
+                 "expected": expected})
     for n in cfg["sizes"]:
         for draw in range(cfg["draws"]):
             points = Primitives.from_points(surface_points(n, f"fig2/points/{n}", draw))
