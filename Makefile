@@ -1,11 +1,12 @@
-# `make run` runs the full sweep and its report; `make test` runs the test suite.
-# Both create .venv and install the project into it when needed.
+# `make run` runs the full sweep and its report; `make test` runs the test suite (CI: .ci/run); `make check` runs
+# the fast tests (no Snakemake, Slurm or browser; under a minute). All create .venv and install the project when
+# needed; only `make test` installs Debian packages.
 PYTHON ?= python3
 VENV := .venv
 STAMP := $(VENV)/.installed
 CORES ?= 2
 
-.PHONY: run test bench clean
+.PHONY: run test check bench clean
 
 $(STAMP): pyproject.toml
 	test -x $(VENV)/bin/python || $(PYTHON) -m venv $(VENV)
@@ -19,6 +20,9 @@ run: $(STAMP)
 test: $(STAMP)
 	bash tests/system_packages.sh
 	$(VENV)/bin/python -m pytest -q
+
+check: $(STAMP)
+	$(VENV)/bin/python -m pytest -q -m "not slow"
 
 bench: $(STAMP)
 	$(VENV)/bin/python benchmarks/em_speed.py

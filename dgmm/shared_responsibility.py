@@ -12,7 +12,7 @@ import numpy as np
 from dgmm.primitives import Primitives
 from dgmm.sweep import expected_log_likelihood
 
-PER_POINT_MEASURE = "triangle, per-point responsibilities"
+PER_POINT_MEASURE = "triangle with per-point responsibilities"
 """The ``measure`` of this expression's row in ``fig2.csv``."""
 
 SUBDIVISIONS = 8

@@ -89,6 +89,7 @@ def test_fit_saves_the_library_fit_and_is_quiet_off_a_terminal(fitted, model_pat
     assert params["history"][-1] == pytest.approx(reference.lower_bound_, abs=1e-12)
 
 
+@pytest.mark.slow
 def test_score_mesh_and_points_round_trip(model_path, bunny_res4, tmp_path):
     reference = reference_fit(bunny_res4)
     mesh_score = float(ok("score", model_path, BUNNY))
@@ -106,6 +107,7 @@ def test_score_mesh_and_points_round_trip(model_path, bunny_res4, tmp_path):
     ("approx", lambda mesh: Primitives.from_mesh(mesh).without_covariances()),
     ("points", lambda mesh: np.asarray(mesh.vertices)),
 ])
+@pytest.mark.slow
 def test_fit_as_kind(kind, build, bunny_res4, tmp_path):
     ok("fit", BUNNY, "-k", K, "--seed", SEED, "--as", kind, "-o", tmp_path / "model.npz")
     reference = reference_fit(build(bunny_res4))
@@ -131,6 +133,7 @@ def test_recordings_pass_rerun_and_mcap_readers(fitted, model_path):
 
 # ---------------------------------------------------------------------------------------------------- sample
 
+@pytest.mark.slow
 def test_sample_matches_mixture_moments(model_path, tmp_path):
     n = 20_000
     ok("sample", model_path, "-n", n, "-o", tmp_path / "a.ply", "--seed", 5)
@@ -167,6 +170,7 @@ def pose(stdout):
     ("icp", 1e-4, 1e-6),   # same points on both sides: exact up to the stopping rule
     ("cpd", 1e-2, 1e-4),
 ])
+@pytest.mark.slow
 def test_register_undoes_a_known_pose(method, angle_tol_deg, translation_tol, model_path, bunny_res4, tmp_path):
     points, rotation, translation = moved_bunny(bunny_res4, tmp_path)
     extra = () if method == "p2d" else ("--target", BUNNY)
@@ -180,6 +184,7 @@ def test_register_undoes_a_known_pose(method, angle_tol_deg, translation_tol, mo
     np.testing.assert_allclose(Rotation.from_quat([x, y, z, w]).as_matrix(), estimated_rotation, atol=1e-9)
 
 
+@pytest.mark.slow
 def test_register_icp_to_model_samples_gives_a_rotation(model_path, bunny_res4, tmp_path):
     points, _, _ = moved_bunny(bunny_res4, tmp_path)
     rotation, _, _ = pose(ok("register", model_path, points, "--method", "icp", "--samples", 500))

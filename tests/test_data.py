@@ -243,6 +243,7 @@ def _surface_distance(points, mesh, k=32):
     return np.linalg.norm(closest - np.repeat(points, k, axis=0), axis=1).reshape(-1, k).min(axis=1)
 
 
+@pytest.mark.slow
 def test_quadric_1000_close_to_authors(bunny):
     """Symmetric mean surface distance to bun_zipper_1000_1.ply under 0.5% of the bounding-box diagonal."""
     ours = trimesh.Trimesh(*decimate_quadric(*bunny, 1000), process=False)
@@ -253,6 +254,7 @@ def test_quadric_1000_close_to_authors(bunny):
     assert (there + back) / 2 < 0.005 * diagonal
 
 
+@pytest.mark.slow
 def test_evaluation_set_scores_like_authors(bunny):
     """A GMM fitted to the authors' 50k points scores our 50k Poisson-disk set within 0.05 nats per point."""
     theirs = load_points(AUTHORS / "bun_zipper_50k.ply")

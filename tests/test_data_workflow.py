@@ -89,6 +89,7 @@ def test_wrong_sha256_fails_without_output(tmp_path):
     assert [p for p in (workdir / "results").rglob("*") if p.is_file() and "logs" not in p.parts] == []
 
 
+@pytest.mark.slow
 def test_bad_config_value_names_the_key(tmp_path):
     config = {**yaml.safe_load(TEST_CONFIG_FILE.read_text())}
     config["data"] = {**DATA, "eval_points": -5}

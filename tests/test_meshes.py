@@ -132,6 +132,7 @@ for array in (poisson_disk(v, f, 500), monte_carlo(v, f, 500), *decimate_cluster
 """
 
 
+@pytest.mark.slow
 def test_samples_repeat_across_processes():
     """pymeshlab takes no seed, but a fresh process repeats the same draws: same bytes twice.
 

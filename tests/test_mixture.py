@@ -59,7 +59,7 @@ def test_one_component_fit_is_the_surface_moments_and_resampling_invariant(bunny
     assert GaussianMixture(1, reg_covar=0.0).fit(finer).score_primitives(finer) == pytest.approx(coarse, rel=1e-12)
 
 
-@pytest.mark.parametrize("n_components", [1, 7, 30])
+@pytest.mark.parametrize("n_components", [1, 7, pytest.param(30, marks=pytest.mark.slow)])
 def test_points_agree_with_scikit_learn_from_the_same_start(bunny_res4, n_components):
     points = trimesh.sample.sample_surface(bunny_res4, 3000, seed=5)[0]
     with warnings.catch_warnings():

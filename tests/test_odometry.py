@@ -82,6 +82,7 @@ def test_depth_png_is_16_bit_scaled_by_5000(tmp_path):
     np.testing.assert_array_equal(read_depth(tmp_path / "d.png"), raw / 5000.0)
 
 
+@pytest.mark.slow
 def test_synthetic_sequence_round_trip(sequence):
     assert len(sequence) == N_FRAMES
     listed = np.array([line.split() for line in (sequence.folder / "depth.txt").read_text().splitlines()
@@ -128,6 +129,7 @@ def test_backprojection_of_a_plane_and_pixel_covariances():
 
 
 # ------------------------------------------------------------------------------------------------ synthetic
+@pytest.mark.slow
 def test_synthetic_generator_is_deterministic(scene, tmp_path):
     with threadpool_limits(1):
         runs = [write_synthetic_sequence(tmp_path / name, scene, n_frames=3, seed=seed)
@@ -139,6 +141,7 @@ def test_synthetic_generator_is_deterministic(scene, tmp_path):
     assert (runs[0].folder / "groundtruth.txt").read_bytes() != (runs[2].folder / "groundtruth.txt").read_bytes()
 
 
+@pytest.mark.slow
 def test_synthetic_groundtruth_agrees_with_depth(sequence, scene):
     """Back-project frame j, move it into frame i by the ground-truth relative pose, and cast a ray from camera
     i through each point: the point lies on the scene surface that ray hits, up to the depth noise."""
@@ -192,6 +195,7 @@ def test_ate_equals_evo(tmp_path):
 
 
 # ------------------------------------------------------------------------------------------------- odometry
+@pytest.mark.slow
 @pytest.mark.parametrize("method, warm_iter", [("gmm-pixels", None), ("gmm-pixels", 5), ("gmm-points", None),
                                                ("icp", None)])
 def test_odometry_on_synthetic_sequence(sequence, method, warm_iter):
@@ -223,6 +227,7 @@ def test_odometry_on_synthetic_sequence(sequence, method, warm_iter):
 
 
 # ---------------------------------------------------------------------------------------------- bad input
+@pytest.mark.slow
 def test_bad_input_names_the_file(sequence, tmp_path):
     with pytest.raises(DataError, match="missing_folder") as missing:
         read_sequence(tmp_path / "missing_folder")

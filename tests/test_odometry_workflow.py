@@ -206,6 +206,7 @@ def test_seconds_summary_adds_the_mean_model_and_registration_times():
     assert summary["mean_seconds_per_frame"] == pytest.approx(2.0 + 1.0)
 
 
+@pytest.mark.slow
 def test_bad_config_value_names_the_key(tmp_path):
     run = run_snakemake(tmp_path, "-n", "odometry", configfile=write_config(tmp_path, frames=1), timeout=300)
     assert run.returncode != 0

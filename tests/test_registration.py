@@ -280,6 +280,7 @@ def test_d2d_solvers_reach_the_same_optimum(bunny, bunny_trial):
 
 
 # ----------------------------------------------------------------------------------- recovering a pose
+@pytest.mark.slow
 @pytest.mark.parametrize("gradient", ["analytic", "numeric"])
 def test_p2d_recovers_a_known_motion(bunny, bunny_trial, gradient):
     result = reg.register_p2d(bunny_trial.apply(bunny.vertices), bunny.mixture, gradient=gradient)
@@ -297,6 +298,7 @@ def _scaled_mixture(mixture, factor):
                            precisions_cholesky_=np.linalg.inv(np.linalg.cholesky(covariances)).transpose(0, 2, 1))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("method", ["p2d", "d2d"])
 def test_registration_does_not_depend_on_length_units(bunny, bunny_trial, method):
     """The same problem in metres and in millimetres must give the same rotation and the same translation."""

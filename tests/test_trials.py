@@ -50,6 +50,7 @@ def test_methods_table_names_the_papers_methods():
         "mesh-kmeans", "mesh-random", "points-kmeans", "points-random"]
 
 
+@pytest.mark.slow
 def test_every_method_undoes_small_trials_on_a_dense_target():
     """With source and target from the same dense sample, every method recovers the pose to within the spacing."""
     dense = sphere_points(3000, seed=1)
