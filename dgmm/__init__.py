@@ -8,16 +8,18 @@ Keselman & Hebert, "Direct Fitting of Gaussian Mixture Models" (2019).
 >>> gmm.score(mesh.sample(50000))                                # mean log-likelihood per point
 """
 from dgmm.errors import ConfigError, DataError, DgmmError, FitError, InputError
-from dgmm.primitives import Primitives
 
 __all__ = ["ConfigError", "DataError", "DgmmError", "FitError", "GaussianMixture", "InputError", "Primitives"]
 __version__ = "0.1.0"
 
 
 def __getattr__(name):
-    """``dgmm.GaussianMixture``, imported on first use: it imports scikit-learn (over a second), which the
-    command line and the workflow's light jobs do without."""
+    """``dgmm.GaussianMixture`` and ``dgmm.Primitives``, imported on first use: scikit-learn (over a second) and
+    numpy are not needed to start the command line."""
     if name == "GaussianMixture":
         from dgmm.mixture import GaussianMixture
         return GaussianMixture
+    if name == "Primitives":
+        from dgmm.primitives import Primitives
+        return Primitives
     raise AttributeError(f"module 'dgmm' has no attribute {name!r}")

@@ -18,11 +18,10 @@ from typing import Callable
 
 from dgmm import __version__
 from dgmm.errors import DataError, DgmmError, InputError
-from dgmm.primitives import Primitives, as_primitives
 from dgmm.variants import INITS, VARIANTS
 
-# File readers (trimesh, scipy), the estimator (scikit-learn), registration and the recorders (rerun, mcap) are
-# imported by the commands that use them, so that `dgmm --help` and argument errors answer at once.
+# numpy, the file readers (trimesh, scipy), the estimator (scikit-learn), registration and the recorders (rerun,
+# mcap) are imported by the commands that use them, so that `dgmm --help` and usage errors answer at once.
 
 BAD_INPUT = 2
 """Exit status for bad usage (argparse's own) and for bad input: any :class:`~dgmm.errors.DgmmError`."""
@@ -68,6 +67,7 @@ def _read_points(path):
 def _read_approx(path):
     """The triangles of a mesh file as area-weighted centroids: the paper's approximation (eq. 5)."""
     from dgmm.data import load_mesh
+    from dgmm.primitives import Primitives
 
     return Primitives.from_mesh(*load_mesh(path)).without_covariances()
 
@@ -168,6 +168,7 @@ def _fit(args):
     """Fit a mixture to ``args.input``, save it to ``args.output``, optionally record the fit."""
     from dgmm.mixture import GaussianMixture
     from dgmm.model_io import save_model
+    from dgmm.primitives import as_primitives
 
     kind, data = read_input(args.input, args.kind)
     model = GaussianMixture(args.k, init=args.init, max_iter=args.iterations, random_state=args.seed,
@@ -407,15 +408,13 @@ def _odometry(args):
 
 def _odometry_arguments(parser):
     """Arguments of ``dgmm odometry``."""
-    from dgmm.mixture import VARIANTS as EM_VARIANTS
-
     parser.add_argument("sequence", type=Path, metavar="SEQUENCE_DIR",
                         help="TUM RGB-D sequence folder (depth.txt, depth/*.png, optional groundtruth.txt)")
     parser.add_argument("--method", choices=("gmm-pixels", "gmm-points", "icp"), default="gmm-pixels",
                         help="GMM of pixel rectangles or of points with D2D registration, or point-to-point ICP on "
                              "2,500 points (default: %(default)s)")
     parser.add_argument("--frames", type=_positive_int, metavar="N", help="use the first N depth frames (default: all)")
-    parser.add_argument("--variant", choices=tuple(EM_VARIANTS), default="textbook",
+    parser.add_argument("--variant", choices=tuple(VARIANTS), default="textbook",
                         help="EM variant: textbook EM, or the authors' published code (default: %(default)s)")
     parser.add_argument("--intrinsics", metavar="fr1|fr2|fr3|ros|FX,FY,CX,CY",
                         help="depth camera (default: from the folder name, rgbd_dataset_freiburgN_*: ros for "

@@ -1,13 +1,14 @@
 """The EM variants and initialisations of :class:`dgmm.mixture.GaussianMixture`, by name.
 
-A module of its own (numpy only) so that the command line can offer the names without importing scikit-learn.
+A module of its own that imports nothing at load, so that the command line offers the names at once.
 """
-import numpy as np
 
 
 def _textbook(sizes):
     """Textbook EM: the E-step is unscaled and sizes weight the M-step (rescaled to mean 1, so that masses
     count primitives whatever the units, as scikit-learn's ``10 eps`` on masses assumes)."""
+    import numpy as np
+
     return np.ones_like(sizes), sizes / sizes.mean()
 
 
@@ -15,7 +16,7 @@ def _authors(sizes):
     """leonidk/direct_gmm's modified scikit-learn 0.20: the E-step's Mahalanobis-plus-trace term is scaled by
     ``alpha_p / min(alpha)`` and the M-step is not weighted by size (every primitive counts once)."""
     present = sizes > 0
-    return sizes / sizes[present].min(), present.astype(np.float64)
+    return sizes / sizes[present].min(), present.astype(float)
 
 
 # variant -> function(sizes) -> (E-step scale per primitive, M-step weight per primitive)

@@ -4,7 +4,7 @@ import sys
 
 import dgmm
 
-HEAVY = ("sklearn", "trimesh", "rerun", "mcap", "scipy.optimize", "matplotlib")
+HEAVY = ("numpy", "sklearn", "trimesh", "rerun", "mcap", "scipy", "matplotlib")
 
 
 def test_help_imports_no_heavy_dependency():
@@ -15,9 +15,11 @@ def test_help_imports_no_heavy_dependency():
     assert run.stdout.splitlines()[-1] == "[]"
 
 
-def test_the_estimator_is_still_an_attribute_of_the_package():
-    from dgmm import GaussianMixture
-    from dgmm.mixture import GaussianMixture as defined
+def test_the_lazy_attributes_are_the_package_s_classes():
+    from dgmm import GaussianMixture, Primitives
+    from dgmm.mixture import GaussianMixture as estimator
+    from dgmm.primitives import Primitives as primitives
 
-    assert GaussianMixture is defined is dgmm.GaussianMixture
-    assert "GaussianMixture" in dgmm.__all__
+    assert GaussianMixture is estimator is dgmm.GaussianMixture
+    assert Primitives is primitives is dgmm.Primitives
+    assert {"GaussianMixture", "Primitives"} <= set(dgmm.__all__)
