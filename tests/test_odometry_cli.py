@@ -13,6 +13,7 @@ import pytest
 from PIL import Image
 
 from tests.test_odometry_metrics import FR1_XYZ, needs_fr1
+from tests.test_recording import read_blueprint, read_rrd
 
 DGMM = Path(sys.executable).with_name("dgmm")
 
@@ -109,3 +110,14 @@ def test_camera_from_the_name_or_the_option(tmp_path):
     result = json.loads(run.stdout)
     assert result["frames"] == 3 and result["ate_rmse_m"] is None and result["rpe_rotation_deg_s"] is None
     assert len(np.loadtxt(tmp_path / "t.txt", comments="#")) == 3
+
+
+@pytest.mark.slow  # a dgmm subprocess
+def test_rrd_opens_on_its_blueprint(tmp_path):
+    folder = small_sequence(tmp_path / "my_room", groundtruth=False)
+    run = dgmm_odometry(folder, "--method", "icp", "--intrinsics", "525,525,319.5,239.5", "-o", tmp_path / "t.txt",
+                        "--rrd", tmp_path / "o.rrd")
+    assert run.returncode == 0, run.stderr
+    timeline, views = read_blueprint(tmp_path / "o.rrd")
+    assert timeline == "frame" and set(views) == {"camera path", "current frame's model", "seconds per frame"}
+    assert sorted(read_rrd(tmp_path / "o.rrd", "/world/camera/model")["frame"]) == [0, 1, 2]
