@@ -10,8 +10,8 @@ Both minimise a cost of the pose ``x -> R (x - c) + c + t'`` about a fixed centr
   definite (Newton steps near the optimum), else a positive semi-definite Gauss-Newton matrix with the
   responsibilities of the current pose (EM-ICP, FilterReg). A step is kept only if it lowers the cost (else
   ``λ`` grows tenfold); a kept Gauss-Newton step, which far from the optimum falls short like an EM step, is
-  stretched 2, 4, 8 times while the cost keeps falling. It stops when a step moves less than ``tol`` (radians,
-  and lengths of the moving points' RMS radius).
+  stretched 2, 4, 8 times while the cost keeps falling; no step exceeds ``max_step``. It stops when a step moves
+  less than ``tol`` (radians, and RMS radii of the moving points).
 """
 from __future__ import annotations
 
@@ -91,7 +91,7 @@ def minimise_bfgs(method, cost, centre, length, x0, gradient, callback, options)
     return snapshot(result.x, result.fun, int(result.nit), bool(result.success))
 
 
-_GAUSS_NEWTON_DEFAULTS = {"max_iter": 100, "tol": 1e-8, "damping": 1e-4}
+_GAUSS_NEWTON_DEFAULTS = {"max_iter": 100, "tol": 1e-8, "damping": 1e-4, "max_step": 0.3}
 _MIN_DAMPING, _MAX_DAMPING = 1e-12, 1e12
 _STRETCH = (2.0, 4.0, 8.0)
 
@@ -164,7 +164,8 @@ def minimise_gauss_newton(method, evaluate, centre, length, rotation, translatio
     callback : callable or None
         ``callback(iteration, registration)`` after every kept step.
     options : dict or None
-        ``max_iter`` (100), ``tol`` (1e-10), ``damping`` (initial λ, 1e-4).
+        ``max_iter`` (100), ``tol`` (1e-8), ``damping`` (initial λ, 1e-4), ``max_step`` (0.3: no step turns by
+        more radians or moves by more RMS radii; longer Newton steps from far away jump to other basins).
 
     Returns
     -------
@@ -175,6 +176,7 @@ def minimise_gauss_newton(method, evaluate, centre, length, rotation, translatio
     if unknown:
         raise InputError(f"unknown gauss-newton options {sorted(unknown)}: use {sorted(_GAUSS_NEWTON_DEFAULTS)}")
     max_iter, tol, damping = int(settings["max_iter"]), float(settings["tol"]), float(settings["damping"])
+    max_step = float(settings["max_step"])
     start = time.perf_counter()
     scale = np.array([length if length > 0 else 1.0] * 3 + [1.0] * 3)
 
@@ -191,7 +193,7 @@ def minimise_gauss_newton(method, evaluate, centre, length, rotation, translatio
         if newton:
             hessian = exact
         while True:
-            step = _damped_step(hessian, gradient, damping)
+            step = _capped(_damped_step(hessian, gradient, damping), scale, max_step)
             new_rotation, new_translation = exp_rotation(step[3:]) @ rotation, translation + step[:3]
             new_cost, new_derivatives = evaluate(new_rotation, new_translation)
             converged = np.max(np.abs(step) / scale) < tol
@@ -204,7 +206,8 @@ def minimise_gauss_newton(method, evaluate, centre, length, rotation, translatio
         else:
             # Far from the optimum the Gauss-Newton (EM) steps fall short: stretch a kept one while the cost falls.
             for factor in (_STRETCH if not newton and not converged else ()):
-                far_rotation, far_translation = exp_rotation(factor * step[3:]) @ rotation, translation + factor * step[:3]
+                far = _capped(factor * step, scale, max_step)
+                far_rotation, far_translation = exp_rotation(far[3:]) @ rotation, translation + far[:3]
                 far_cost, far_derivatives = evaluate(far_rotation, far_translation)
                 if far_cost >= new_cost:
                     break
@@ -225,6 +228,13 @@ def check_solver(solver, gradient):
         raise InputError(f"gradient must be one of {sorted(_GRADIENT_MODES)}, got {gradient!r}")
     if solver != "bfgs" and gradient != "analytic":
         raise InputError(f"gradient={gradient!r} applies to solver='bfgs' only; {solver!r} uses the analytic one")
+
+
+def _capped(step, scale, max_step):
+    """``step`` shortened, if needed, so that it turns by at most ``max_step`` radians and moves by at most
+    ``max_step`` RMS radii."""
+    size = max(np.linalg.norm(step[:3] / scale[:3]), np.linalg.norm(step[3:]))
+    return step if size <= max_step else step * (max_step / size)
 
 
 def _damped_step(hessian, gradient, damping):
