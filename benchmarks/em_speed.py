@@ -44,20 +44,35 @@ def starting_parameters(points, n_components):
     return dict(weights_init=start.weights_, means_init=start.means_, precisions_init=start.precisions_)
 
 
-def main():
+def bunny_points():
+    """The benchmark's bunny res4 mesh and its N surface points (seed 0)."""
     mesh = trimesh.load(BUNNY_RES4, process=False)
-    points = trimesh.sample.sample_surface(mesh, N, seed=0)[0]
+    return mesh, trimesh.sample.sample_surface(mesh, N, seed=0)[0]
+
+
+def sklearn_fit(points, init):
+    """scikit-learn's EM on ``points``: K components, ITERATIONS iterations, tol 0, from ``init``."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return SklearnGaussianMixture(K, max_iter=ITERATIONS, tol=0, **init).fit(points)
+
+
+def sklearn_fit_seconds():
+    """The project's speed yardstick: scikit-learn's wall time for the fit of :func:`main` (call it on one BLAS
+    thread), also the unit of benchmarks/sweep_profile.py."""
+    points = bunny_points()[1]
+    init = starting_parameters(points, K)
+    return timed(lambda: sklearn_fit(points, init))[0]
+
+
+def main():
+    mesh, points = bunny_points()
     init = starting_parameters(points, K)
     blas = {(i["internal_api"], i.get("architecture")) for i in threadpool_info()}
     print(f"bunny res4, {N} points, K={K}, {ITERATIONS} iterations, tol 0, 1 thread; libraries: {sorted(blas)}")
 
-    def sklearn_fit():
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            return SklearnGaussianMixture(K, max_iter=ITERATIONS, tol=0, **init).fit(points)
-
     ours_fit = lambda: GaussianMixture(K, max_iter=ITERATIONS, tol=0, **init).fit(points)  # noqa: E731
-    t_sk, sk, mem_sk = timed(sklearn_fit)
+    t_sk, sk, mem_sk = timed(lambda: sklearn_fit(points, init))
     t_ours, ours, mem_ours = timed(ours_fit, repeats=3)
     ll_sk, ll_ours = sk.score(points), ours.score(points)
     print(f"fit      scikit-learn {t_sk:7.3f} s  {mem_sk:7.1f} MiB  log-likelihood {ll_sk:.12f}")
