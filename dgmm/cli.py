@@ -116,11 +116,12 @@ def read_input(path, kind=None):
 # fit
 # ---------------------------------------------------------------------------------------------------------
 
-def _progress_bar(total):
-    """A tqdm bar over EM iterations, on stderr, shown only on a terminal and only for fits that take a while."""
+def _progress_bar(total, desc="EM", unit="it"):
+    """A tqdm bar (EM iterations by default), on stderr, shown only on a terminal and only for runs that take a
+    while."""
     from tqdm import tqdm
 
-    return tqdm(total=total, desc="EM", unit="it", disable=not sys.stderr.isatty(), delay=PROGRESS_DELAY,
+    return tqdm(total=total, desc=desc, unit=unit, disable=not sys.stderr.isatty(), delay=PROGRESS_DELAY,
                 leave=False)
 
 
@@ -381,8 +382,7 @@ def _odometry(args):
               "frames": n_frames, "intrinsics": camera, "variant": args.variant, "warm_iter": args.warm_iter,
               "seed": args.seed}
     with ExitStack() as stack:
-        bar = stack.enter_context(tqdm(total=n_frames, desc="odometry", unit="frame",
-                                       disable=not sys.stderr.isatty(), delay=PROGRESS_DELAY, leave=False))
+        bar = stack.enter_context(_progress_bar(n_frames, desc="odometry", unit="frame"))
         recorder = None
         if args.mcap is not None or args.rrd is not None:  # the recorder always writes MCAP: a discarded copy
             mcap = args.mcap or Path(stack.enter_context(tempfile.TemporaryDirectory())) / "odometry.mcap"
