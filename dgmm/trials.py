@@ -24,6 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from dgmm.coarse_to_fine import register_p2d_coarse_to_fine
 from dgmm.errors import InputError
 from dgmm.mixture import GaussianMixture
 from dgmm.registration import (RigidTrial, random_trials, register_cpd, register_icp, register_p2d,
@@ -40,7 +41,7 @@ class Method:
 
     Attributes
     ----------
-    algorithm : {"p2d", "icp", "cpd"}
+    algorithm : {"p2d", "p2d-c2f", "icp", "cpd"}
         Key of the registration function and of its options in :func:`run_trials`.
     representation : str or None
         How the mesh becomes the mixture's input (a ``dgmm.sweep.REPRESENTATIONS`` key); None for methods that
@@ -61,19 +62,29 @@ class Method:
 
 _MIXTURE_INPUTS = {"mesh": "exact", "points": "vertices"}
 METHODS = {
-    **{f"{kind}-{init}": Method("p2d", representation, init)
+    **{f"{kind}-{init}{suffix}": Method(algorithm, representation, init)
+       for suffix, algorithm in (("", "p2d"), ("-c2f", "p2d-c2f"))
        for kind, representation in _MIXTURE_INPUTS.items() for init in ("kmeans", "random")},
     "icp": Method("icp"),
     "cpd": Method("cpd"),
 }
-"""The paper's Fig 5 methods: P2D on mesh and point mixtures, point-to-point ICP and CPD."""
+"""The paper's Fig 5 methods: P2D on mesh and point mixtures, point-to-point ICP and CPD; and ``*-c2f``, P2D on the
+same mixtures over a coarse-to-fine schedule of widened covariances (:mod:`dgmm.coarse_to_fine`)."""
 
 # algorithm -> register(moved source, target points, mixture, callback=..., **options)
 _ALGORITHMS = {
     "p2d": lambda moved, target, mixture, **options: register_p2d(moved, mixture, **options),
+    "p2d-c2f": lambda moved, target, mixture, **options: register_p2d_coarse_to_fine(moved, mixture, **options),
     "icp": lambda moved, target, mixture, **options: register_icp(moved, target, **options),
     "cpd": lambda moved, target, mixture, **options: register_cpd(moved, target, **options),
 }
+
+
+def mixture_source(name):
+    """The method whose fitted mixture method ``name`` registers to: ``*-c2f`` uses its paper P2D's (the same
+    mixture, so that the two compare on it), every other method its own."""
+    get_method(name)
+    return name.removesuffix("-c2f")
 
 
 def get_method(name):

@@ -16,7 +16,7 @@ from dgmm.data import load_mesh, save_ply
 from dgmm.report import claims, figure_names
 from dgmm.report.build import figure_of, summary_rows
 from dgmm.report.document import markdown_table, to_html, to_markdown
-from dgmm.report.tables import fig2_bars, likelihood_means, registration_errors, table1
+from dgmm.report.tables import fig2_bars, likelihood_means, registration_errors, table1, table1_mesh
 from dgmm.shared_responsibility import PER_POINT_MEASURE
 from dgmm.tables import read_csv, write_csv
 from tests.conftest import SHARED_DATA
@@ -70,22 +70,33 @@ def test_fig2_bars_average_the_draws_and_take_all_points_as_reference():
 
 
 def test_table1_is_ours_beside_the_paper_with_errors_as_percent_of_icp():
-    means = {("bunny", "quadric1000-exact", "textbook", "kmeans", 100): (8.0, 0.1),
-             ("bunny", "quadric1000-vertices", "textbook", "kmeans", 100): (7.0, 0.1),
-             ("bunny", "quadric1000-exact", "authors", "kmeans", 100): (99.0, 0.1)}  # not Table 1's variant
-    rows = (reg_rows("bunny", "quadric1000", "icp", [2.0, 4.0], [1.0, 1.0])
-            + reg_rows("bunny", "quadric1000", "mesh-kmeans", [0.3, 0.9], [0.25, 0.25])
-            + reg_rows("bunny", "quadric1000", "points-kmeans", [1.5, 1.5], [0.5, 1.5])
-            + reg_rows("bunny", "res4", "icp", [100.0, 100.0], [100.0, 100.0]))  # Fig 5's mesh: not in Table 1
+    means = {("dragon", "quadric1000-exact", "textbook", "kmeans", 100): (8.0, 0.1),
+             ("dragon", "quadric1000-vertices", "textbook", "kmeans", 100): (7.0, 0.1),
+             ("dragon", "quadric1000-exact", "authors", "kmeans", 100): (99.0, 0.1),  # not Table 1's variant
+             ("bunny", "res4-exact", "textbook", "kmeans", 100): (8.2, 0.1),  # the bunny's row is res4 ...
+             ("bunny", "quadric1000-exact", "textbook", "kmeans", 100): (99.0, 0.1)}  # ... not quadric1000
+    rows = (reg_rows("dragon", "quadric1000", "icp", [2.0, 4.0], [1.0, 1.0])
+            + reg_rows("dragon", "quadric1000", "mesh-kmeans", [0.3, 0.9], [0.25, 0.25])
+            + reg_rows("dragon", "quadric1000", "mesh-kmeans-c2f", [0.3, 0.3], [0.1, 0.3])
+            + reg_rows("dragon", "quadric1000", "points-kmeans", [1.5, 1.5], [0.5, 1.5])
+            + reg_rows("bunny", "res4", "icp", [1.0, 1.0], [1.0, 1.0])
+            + reg_rows("bunny", "res4", "mesh-kmeans", [0.5, 0.5], [0.5, 0.5])
+            + reg_rows("bunny", "quadric1000", "icp", [100.0, 100.0], [100.0, 100.0]))  # not the bunny's mesh
     errors = registration_errors([{key: str(value) for key, value in row.items()} for row in rows])
     table = {row["model"]: row for row in table1(means, errors)}
     assert list(table) == list(MODELS)
+    dragon = table["dragon"]
+    assert dragon["mesh"] == "quadric1000"
+    assert (dragon["ll_points"], dragon["ll_mesh"]) == (7.0, 8.0)
+    assert dragon["rot_mesh"] == pytest.approx(20.0)       # 0.6 / 3
+    assert dragon["rot_mesh_c2f"] == pytest.approx(10.0)   # 0.3 / 3
+    assert dragon["rot_points"] == pytest.approx(50.0)     # 1.5 / 3
+    assert dragon["trans_mesh"] == pytest.approx(25.0)     # 0.25 / 1
+    assert dragon["trans_mesh_c2f"] == pytest.approx(20.0)  # 0.2 / 1
+    assert dragon["trans_points"] == pytest.approx(100.0)  # 1.0 / 1
     bunny = table["bunny"]
-    assert (bunny["ll_points"], bunny["ll_mesh"]) == (7.0, 8.0)
-    assert bunny["rot_mesh"] == pytest.approx(20.0)       # 0.6 / 3
-    assert bunny["rot_points"] == pytest.approx(50.0)     # 1.5 / 3
-    assert bunny["trans_mesh"] == pytest.approx(25.0)     # 0.25 / 1
-    assert bunny["trans_points"] == pytest.approx(100.0)  # 1.0 / 1
+    assert bunny["mesh"] == "res4" and bunny["ll_mesh"] == 8.2 and math.isnan(bunny["ll_points"])
+    assert bunny["rot_mesh"] == pytest.approx(50.0) and math.isnan(bunny["rot_mesh_c2f"])
     assert (bunny["ll_points_paper"], bunny["ll_mesh_paper"], bunny["rot_mesh_paper"]) == (7.6, 8.2, 17.0)
     assert math.isnan(table["lucy"]["ll_mesh"]) and table["lucy"]["ll_mesh_paper"] == -18.3
 
@@ -255,15 +266,15 @@ def synthetic_results(results):
                         rows.append(ll_row("bunny", name, k, init, variant, seed,
                                            7.0 + 0.3 * np.log(k / 25) - 0.2 * index + 0.05 * seed))
     for m, model in enumerate(MODELS):
-        for name, value in (("quadric1000-exact", 8.0 - m), ("quadric1000-vertices", 7.0 - m)):
-            rows.append(ll_row(model, name, 100, "kmeans", "textbook", 0, value))
+        for name, value in (("exact", 8.0 - m), ("vertices", 7.0 - m)):
+            rows.append(ll_row(model, f"{table1_mesh(model)}-{name}", 100, "kmeans", "textbook", 0, value))
     write_csv(results / "tables" / "likelihood.csv", rows)
     write_csv(results / "tables" / "fig2.csv", [{k: row[k] for k in row} for row in FIG2_ROWS])
     reg = []
-    for method in ("mesh-kmeans", "mesh-random", "points-kmeans", "points-random", "icp", "cpd"):
+    for method in ("mesh-kmeans", "mesh-random", "points-kmeans", "points-random", "mesh-kmeans-c2f", "icp", "cpd"):
         reg += reg_rows("bunny", "res4", method, rng.lognormal(0, 1, 12), rng.lognormal(-2, 1, 12))
-    for model in MODELS:
-        for method in ("mesh-kmeans", "points-kmeans", "icp"):
+    for model in MODELS[:1] + MODELS[2:]:
+        for method in ("mesh-kmeans", "mesh-kmeans-c2f", "points-kmeans", "icp"):
             reg += reg_rows(model, "quadric1000", method, rng.lognormal(0, 1, 3), rng.lognormal(-2, 1, 3))
     write_csv(results / "tables" / "registration.csv", reg)
     write_csv(results / "tables" / "odometry.csv", [
@@ -338,7 +349,8 @@ def test_table1_has_five_models_with_finite_numbers(built):
     rows = read_csv(out / "table1.csv")
     assert [row["model"] for row in rows] == list(MODELS)
     for m, row in enumerate(rows):
-        assert all(np.isfinite(float(value)) for key, value in row.items() if key != "model")
+        assert row["mesh"] == table1_mesh(row["model"])
+        assert all(np.isfinite(float(value)) for key, value in row.items() if key not in ("model", "mesh"))
         assert (float(row["ll_mesh"]), float(row["ll_points"])) == (8.0 - m, 7.0 - m)
 
 

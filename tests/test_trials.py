@@ -5,7 +5,7 @@ from scipy.spatial.transform import Rotation
 
 from dgmm.errors import InputError
 from dgmm.mixture import GaussianMixture
-from dgmm.trials import METHODS, bounding_diagonal, make_trials, run_trials
+from dgmm.trials import METHODS, bounding_diagonal, make_trials, mixture_source, run_trials
 
 
 def sphere_points(n, seed=0):
@@ -44,10 +44,13 @@ def test_bounding_diagonal_of_a_box():
     assert bounding_diagonal(corners) == 13.0
 
 
-def test_methods_table_names_the_papers_methods():
-    assert set(METHODS) == {"mesh-kmeans", "mesh-random", "points-kmeans", "points-random", "icp", "cpd"}
+def test_methods_table_names_the_papers_methods_and_their_coarse_to_fine_p2d():
+    paper = ["mesh-kmeans", "mesh-random", "points-kmeans", "points-random"]
+    assert set(METHODS) == {*paper, *(f"{name}-c2f" for name in paper), "icp", "cpd"}
     assert [name for name, method in METHODS.items() if method.needs_mixture] == [
-        "mesh-kmeans", "mesh-random", "points-kmeans", "points-random"]
+        *paper, *(f"{name}-c2f" for name in paper)]
+    assert [mixture_source(f"{name}-c2f") for name in paper] == paper
+    assert mixture_source("mesh-kmeans") == "mesh-kmeans"
 
 
 @pytest.mark.slow

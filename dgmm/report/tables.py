@@ -17,11 +17,15 @@ from dgmm.report import paper
 from dgmm.shared_responsibility import PER_POINT_MEASURE
 
 FIG2_EXPRESSIONS = ("triangle", "centroid", "area x centroid")
-TABLE1_MESH = "quadric1000"  # the registered mesh of Table 1 (the data stage's quadric decimation)
+TABLE1_MESH = "quadric1000"  # the mesh of Table 1 (the data stage's quadric decimation), except for ...
+TABLE1_MESHES = {"bunny": "res4"}  # ... the bunny: res4, as the authors' gmm_fit_extra.py and registration_test.py
 FIG5_MESH = ("bunny", "res4")  # (model, mesh) of Fig 5
-TABLE1_INPUTS = {"points": "quadric1000-vertices", "mesh": "quadric1000-exact"}
+TABLE1_INPUTS = {"points": "vertices", "mesh": "exact"}  # representations of Table 1's mesh
 TABLE1_FIT = {"K": 100, "init": "kmeans", "variant": "textbook"}
-TABLE1_METHODS = {"points": "points-kmeans", "mesh": "mesh-kmeans", "reference": "icp"}
+TABLE1_METHODS = {"points": "points-kmeans", "mesh": "mesh-kmeans", "mesh_c2f": "mesh-kmeans-c2f",
+                  "reference": "icp"}
+TABLE1_C2F_COLUMNS = ("rot_mesh_c2f", "trans_mesh_c2f")
+"""Table 1's columns of the coarse-to-fine P2D (dgmm.coarse_to_fine), which the paper does not have."""
 ERRORS = {"rot": "rotation_error_deg", "trans": "translation_error_pct"}
 
 
@@ -99,10 +103,15 @@ def registration_errors(rows):
     return {key: {name: np.array(values) for name, values in errors.items()} for key, errors in groups.items()}
 
 
+def table1_mesh(model):
+    """The data-stage mesh of ``model``'s Table 1 row."""
+    return TABLE1_MESHES.get(model, TABLE1_MESH)
+
+
 def _percent_of_reference(errors, model, method, name):
     """Mean error of ``method`` on Table 1's mesh as % of the reference method's (ICP); nan when either is missing."""
-    measured = errors.get((model, TABLE1_MESH, method))
-    reference = errors.get((model, TABLE1_MESH, TABLE1_METHODS["reference"]))
+    measured = errors.get((model, table1_mesh(model), method))
+    reference = errors.get((model, table1_mesh(model), TABLE1_METHODS["reference"]))
     if measured is None or reference is None:
         return math.nan
     return 100.0 * float(np.mean(measured[name])) / float(np.mean(reference[name]))
@@ -121,27 +130,33 @@ def table1(means, errors=None):
     Returns
     -------
     list of dict
-        One per model: ``model`` and, for each column of ``paper.TABLE1_COLUMNS``, ours and ``{column}_paper``.
+        One per model: ``model``, ``mesh`` (its Table 1 mesh, :func:`table1_mesh`), for each column of
+        ``paper.TABLE1_COLUMNS`` ours and ``{column}_paper``, then ours of ``TABLE1_C2F_COLUMNS``.
         Likelihoods are mean eval log-likelihoods (nats); errors are % of ICP's mean error.
     """
     fit = TABLE1_FIT
     rows = []
     for model, published in paper.TABLE1.items():
-        ours = {f"ll_{kind}": means.get((model, name, fit["variant"], fit["init"], fit["K"]), (math.nan,))[0]
-                for kind, name in TABLE1_INPUTS.items()}
+        mesh = table1_mesh(model)
+        ours = {f"ll_{kind}": means.get((model, f"{mesh}-{representation}", fit["variant"], fit["init"], fit["K"]),
+                                        (math.nan,))[0]
+                for kind, representation in TABLE1_INPUTS.items()}
         for name in ERRORS:
-            for kind in ("points", "mesh"):
+            for kind in ("points", "mesh", "mesh_c2f"):
                 ours[f"{name}_{kind}"] = _percent_of_reference(errors or {}, model, TABLE1_METHODS[kind], name)
-        row = {"model": model}
+        row = {"model": model, "mesh": mesh}
         for column, value in zip(paper.TABLE1_COLUMNS, published):
             row[column], row[f"{column}_paper"] = ours[column], value
+        row.update({column: ours[column] for column in TABLE1_C2F_COLUMNS})
         rows.append(row)
     return rows
 
 
 def table1_columns():
-    """Column order of ``table1.csv``: model, then each measure as ours and the paper's."""
-    return ["model", *(name for column in paper.TABLE1_COLUMNS for name in (column, f"{column}_paper"))]
+    """Column order of ``table1.csv``: model, mesh, each measure as ours and the paper's, then the coarse-to-fine
+    P2D's errors (ours only)."""
+    return ["model", "mesh", *(name for column in paper.TABLE1_COLUMNS for name in (column, f"{column}_paper")),
+            *TABLE1_C2F_COLUMNS]
 
 
 def format_number(value, digits=2):

@@ -3,13 +3,14 @@
 # points are drawn from the Poisson-disk evaluation set of the mesh the registered mesh comes from (res4's own,
 # else the full model's). Under results/registration/{model}/{mesh}/{method}/:
 #   gmm.npz, fit.mcap, fit.rrd   P2D methods: the mixture, fitted once and used by every chunk, and its fit logs
+#                                (*-c2f methods register to the mixture of the same method without the suffix)
 #   c{chunk}/errors.csv          one row per trial: errors, iterations, convergence (deterministic)
 #   c{chunk}/seconds.csv         each trial's wall time (kept apart so that errors stay byte-identical)
 #   c{chunk}/trials.mcap         every trial's true and estimated pose, errors, iterations and time (Foxglove)
 #   c{chunk}/trials.rrd          the chunk's first trials: source points moving iteration by iteration
 # and results/tables/registration.csv, registration_seconds.csv gather every chunk.
 from dgmm.data import REGISTRY
-from dgmm.trials import METHODS
+from dgmm.trials import METHODS, mixture_source
 
 REG = config["registration"]
 REG_DIR = f"{RESULTS}/registration/{{model}}/{{mesh}}/{{method}}"
@@ -52,11 +53,14 @@ def dense_sample(wildcards):
 
 
 def registration_mixture(wildcards):
-    """The method's fitted mixture, for the methods that use one."""
-    return {"gmm": REG_DIR.format(**wildcards) + "/gmm.npz"} if METHODS[wildcards.method].needs_mixture else {}
+    """The method's fitted mixture, for the methods that use one (``*-c2f``: its paper P2D's)."""
+    if not METHODS[wildcards.method].needs_mixture:
+        return {}
+    return {"gmm": REG_DIR.format(**{**wildcards, "method": mixture_source(wildcards.method)}) + "/gmm.npz"}
 
 
 REG_WILDCARDS = dict(model="|".join(REGISTRY), mesh="[a-z0-9]+", method="|".join(METHODS), chunk=r"\d+")
+C2F_SCALES = REG.get("c2f_scales", [0.5, 0.25, 0.125, 0.0625, 0.0])
 REG_MIXTURE = {key: REG[key] for key in ("components", "max_iter", "tol", "reg_covar", "variant")}
 
 
@@ -97,7 +101,8 @@ rule registration_chunk:
         recorded=REG["recorded_trials"],
         max_angle_deg=REG["max_angle_deg"],
         max_translation=REG["max_translation"],
-        options={"p2d": {"gradient": REG["gradient"]}, "icp": REG["icp"], "cpd": REG["cpd"]},
+        options={"p2d": {"gradient": REG["gradient"]}, "p2d-c2f": {"gradient": REG["gradient"], "scales": C2F_SCALES},
+                 "icp": REG["icp"], "cpd": REG["cpd"]},
     log:
         f"{RESULTS}/logs/registration/{{model}}/{{mesh}}/{{method}}/c{{chunk}}.log",
     threads: 1
