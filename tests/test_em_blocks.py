@@ -26,6 +26,7 @@ def test_blocks_cover_the_rows_in_order_within_the_limit():
     assert total[0] == 999 * 1000 // 2
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("variant", ["textbook", "authors"])
 @pytest.mark.parametrize("init", ["kmeans", "random"])
 def test_blocked_fit_equals_one_block_and_is_the_same_on_any_thread_count(bunny_res4, variant, init):

@@ -22,6 +22,7 @@ def dgmm_odometry(*args):
     return subprocess.run([str(DGMM), "odometry", *map(str, args)], capture_output=True, text=True, timeout=600)
 
 
+@pytest.mark.slow
 @needs_fr1
 def test_fr1_xyz_trajectory_and_metrics_equal_evo(tmp_path):
     from evo.core import metrics, sync
@@ -88,6 +89,7 @@ def groundtruth_elsewhere(folder):
     (folder / "groundtruth.txt").write_text("5.0 0 0 0 0 0 0 1\n5.01 0 0 0 0 0 0 1\n5.02 0 0 0 0 0 0 1\n")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("breakage, message", [(no_listing, "depth.txt"), (unreadable_png, "1.png"),
                                                (wrong_size, "0.png: 320x240 image"), (one_frame, "at least 2"),
                                                (groundtruth_elsewhere, "groundtruth.txt")])
@@ -101,6 +103,7 @@ def test_bad_input_is_one_line_exit_2_and_no_trajectory(tmp_path, breakage, mess
     assert sorted(p.name for p in tmp_path.iterdir()) == [folder.name]  # no trajectory, no recording
 
 
+@pytest.mark.slow
 def test_camera_from_the_name_or_the_option(tmp_path):
     folder = small_sequence(tmp_path / "my_room", groundtruth=False)
     run = dgmm_odometry(folder, "--method", "icp")

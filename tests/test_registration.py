@@ -254,6 +254,7 @@ def _pose_difference(a, b, diagonal):
     return np.radians(reg.rotation_distance_deg(a.rotation, b.rotation)), np.abs(a.translation - b.translation).max()
 
 
+@pytest.mark.slow
 def test_p2d_solvers_reach_the_same_optimum(bunny):
     """On well-posed bunny trials BFGS (driven to its tightest gradient test) and Gauss-Newton agree."""
     for trial in reg.random_trials(5, 50, bunny.diagonal, bunny.vertices.mean(axis=0)):

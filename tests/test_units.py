@@ -57,6 +57,7 @@ def test_point_fits_scale_with_the_data(scale, seed, init):
     assert_scaled(fit(scale), fit(1.0), scale, lambda s: points[::7] * s)
 
 
+@pytest.mark.slow
 @settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(scale=scales, seed=st.integers(0, 2**16), variant=st.sampled_from(["textbook", "authors"]))
 def test_triangle_fits_scale_with_the_data(scale, seed, variant):
