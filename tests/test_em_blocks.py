@@ -52,6 +52,7 @@ def test_blocked_fit_equals_one_block_and_is_the_same_on_any_thread_count(bunny_
         np.testing.assert_allclose(getattr(one, name), expected, rtol=0, atol=1e-12 * np.abs(expected).max())
 
 
+@pytest.mark.slow
 def test_blocked_threaded_fit_agrees_with_scikit_learn(bunny_res4):
     points = trimesh.sample.sample_surface(bunny_res4, 5000, seed=6)[0]
     with warnings.catch_warnings():

@@ -49,6 +49,7 @@ def assert_scaled(fit, reference, scale, queries):
         reference.score_primitives(queries(1.0)), abs=tolerance)
 
 
+@pytest.mark.slow
 @settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(scale=scales, seed=st.integers(0, 2**16), init=st.sampled_from(["kmeans", "random"]))
 def test_point_fits_scale_with_the_data(scale, seed, init):
