@@ -32,7 +32,8 @@ FAILURE = 1
 PROGRESS_DELAY = 1.0
 """Seconds a fit runs before its progress bar appears (on a terminal only)."""
 
-_ESTIMATOR_PARAMS = ("n_components", "init", "max_iter", "tol", "reg_covar", "variant", "random_state")
+_ESTIMATOR_PARAMS = ("n_components", "init", "max_iter", "tol", "reg_covar", "variant", "random_state",
+                     "memory_limit")
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -173,7 +174,9 @@ def _fit(args):
 
     kind, data = read_input(args.input, args.kind)
     model = GaussianMixture(args.k, init=args.init, max_iter=args.iterations, random_state=args.seed,
-                            variant=args.variant)
+                            variant=args.variant, n_jobs=args.jobs)
+    if args.memory_limit is not None:
+        model.set_params(memory_limit=args.memory_limit * 2**20)
     n_prims = len(as_primitives(data))
     params = {"dgmm_version": __version__, "input": str(args.input), "as": kind, "n_prims": n_prims,
               **{name: getattr(model, name) for name in _ESTIMATOR_PARAMS}}
@@ -206,6 +209,11 @@ def _fit_arguments(parser):
     parser.add_argument("--seed", type=_seed, default=0, metavar="S", help="random seed (default: %(default)s)")
     parser.add_argument("--variant", choices=tuple(VARIANTS), default="textbook",
                         help="EM variant: textbook EM, or the authors' published code (default: %(default)s)")
+    parser.add_argument("--jobs", type=_positive_int, default=1, metavar="N",
+                        help="threads for EM (same result for any N; default: %(default)s)")
+    parser.add_argument("--memory-limit", type=_positive_int, metavar="MB",
+                        help="MiB of responsibilities EM may hold at once; larger inputs stream in blocks "
+                             "(default: 128)")
     parser.add_argument("--mcap", type=Path, metavar="F", help="record every EM iteration to this MCAP file")
     parser.add_argument("--rrd", type=Path, metavar="F", help="record the fit to this rerun recording (.rrd)")
 

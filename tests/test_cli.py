@@ -117,6 +117,19 @@ def test_fit_as_kind(kind, build, bunny_res4, tmp_path):
         assert json.loads(str(model["params"]))["as"] == kind
 
 
+def test_fit_streams_in_blocks_on_two_threads(bunny_res4, tmp_path):
+    """60,672 triangles at K=8 hold 15 MiB of responsibilities: with 1 MiB allowed, EM streams in blocks."""
+    bunny_res4.subdivide().subdivide().subdivide().export(tmp_path / "fine.ply")
+    ok("fit", tmp_path / "fine.ply", "-k", K, "--seed", SEED, "--jobs", 2, "--memory-limit", 1,
+       "-o", tmp_path / "model.npz")
+    mesh = trimesh.load(tmp_path / "fine.ply", process=False)  # as written (float32 coordinates)
+    reference = GaussianMixture(K, random_state=SEED, memory_limit=2**20).fit(mesh)  # one thread
+    with np.load(tmp_path / "model.npz") as model:
+        assert np.array_equal(model["means"], reference.means_)
+        assert np.array_equal(model["covariances"], reference.covariances_)
+        assert json.loads(str(model["params"]))["memory_limit"] == 2**20
+
+
 def test_recordings_pass_rerun_and_mcap_readers(fitted, model_path):
     folder, _ = fitted
     verify = subprocess.run([RERUN_CLI, "rrd", "verify", str(folder / "bunny.rrd")], capture_output=True, text=True)
