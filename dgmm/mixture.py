@@ -150,6 +150,16 @@ def _moment_features(means, covariances, centre, scale, unit=1.0):
     return features
 
 
+def _moment_table(prims, centre, unit):
+    """:func:`_moment_features` (scale 1) of all ``prims``, built chunk by chunk so that its (n_prims, 3, 3)
+    temporaries never exist for all primitives at once."""
+    table = np.empty((len(prims), 11))
+    for start in range(0, len(prims), _SCORE_CHUNK):
+        rows = slice(start, start + _SCORE_CHUNK)
+        table[rows] = _moment_features(prims.means[rows], prims.covariances[rows], centre, 1.0, unit)
+    return table
+
+
 def _component_coefficients(weights, means, precisions_cholesky, unit=1.0):
     """Coefficients ``(n_components, 11)`` such that features · coefficients = log rho (E-step).
 
@@ -450,7 +460,7 @@ class GaussianMixture(BaseEstimator):
         self._check_parameters(prims)
         scale, mstep_weights = VARIANTS[self.variant](prims.weights)
         centre, unit = self._frame(prims, mstep_weights)
-        table = _moment_features(prims.means, prims.covariances, centre, 1.0, unit)
+        table = _moment_table(prims, centre, unit)
         reg_covar = self.reg_covar / unit**2
         rng = np.random.default_rng(self.random_state)
         log_norm = np.empty(len(prims))

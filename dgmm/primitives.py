@@ -69,6 +69,17 @@ def triangle_moments(triangles):
     return centroids, areas, covariances
 
 
+def _mesh_moments(vertices, faces, chunk=1 << 16):
+    """:func:`triangle_moments` of every face, ``chunk`` faces at a time (so that its (n, 3, 3) temporaries
+    exist for one chunk only: a mesh of millions of triangles needs no more than its moments)."""
+    n = len(faces)
+    centroids, areas, covariances = np.empty((n, 3)), np.empty(n), np.empty((n, 3, 3))
+    for start in range(0, n, chunk):
+        rows = slice(start, start + chunk)
+        centroids[rows], areas[rows], covariances[rows] = triangle_moments(vertices[faces[rows]])
+    return centroids, areas, covariances
+
+
 @dataclass(frozen=True)
 class Primitives:
     """An immutable set of primitives given by their moments.
@@ -152,11 +163,13 @@ class Primitives:
             raise InputError(f"mesh faces must be integer vertex indices, got {faces.dtype}")
         if faces.min() < 0 or faces.max() >= len(vertices):
             raise InputError(f"mesh faces index vertices outside 0..{len(vertices) - 1}")
-        centroids, areas, covariances = triangle_moments(vertices[faces])
+        centroids, areas, covariances = _mesh_moments(vertices, faces)
         keep = areas > 0
         if not np.any(keep):
             raise InputError("mesh has no face of positive area")
-        return cls(centroids[keep], covariances[keep], areas[keep])
+        if not np.all(keep):
+            centroids, areas, covariances = centroids[keep], areas[keep], covariances[keep]
+        return cls(centroids, covariances, areas)
 
     def without_covariances(self):
         """The paper's area × centroid approximation (eq. 5): same means and sizes, zero covariance."""
