@@ -27,7 +27,7 @@ import numpy as np
 from dgmm.coarse_to_fine import register_p2d_coarse_to_fine
 from dgmm.errors import InputError
 from dgmm.mixture import GaussianMixture
-from dgmm.registration import (RigidTrial, random_trials, register_cpd, register_icp, register_p2d,
+from dgmm.registration import (BUNNY_DIAGONAL, RigidTrial, random_trials, register_cpd, register_icp, register_p2d,
                                registration_errors)
 from dgmm.sweep import REPRESENTATIONS, job_seed
 
@@ -154,7 +154,13 @@ class TrialSetup:
         return self.trial.apply(self.source)
 
 
-def make_trials(dense, n_points, indices, *, root_seed, key, diagonal, max_angle_deg=15.0, max_translation=0.05):
+PROTOCOLS = ("scaled", "literal")
+"""Trial translations: ``scaled`` by the model's diagonal over the bunny's, or the authors' ``literal`` ±0.05 in
+the model's own units (registration_test.py, written for the bunny in metres, where both coincide)."""
+
+
+def make_trials(dense, n_points, indices, *, root_seed, key, diagonal, max_angle_deg=15.0, max_translation=0.05,
+                protocol="scaled"):
     """The trials ``indices`` of the experiment ``key``, each from its own seed.
 
     Parameters
@@ -172,11 +178,16 @@ def make_trials(dense, n_points, indices, *, root_seed, key, diagonal, max_angle
         The model's bounding-box diagonal, the scale of the trial translations.
     max_angle_deg, max_translation : float
         See :func:`dgmm.registration.random_trials`.
+    protocol : {"scaled", "literal"}, default="scaled"
+        See :data:`PROTOCOLS`: ``max_translation`` times ``diagonal / BUNNY_DIAGONAL``, or in model units.
 
     Returns
     -------
     list of TrialSetup
     """
+    if protocol not in PROTOCOLS:
+        raise InputError(f"trial protocol {protocol!r}: must be one of {PROTOCOLS}")
+    scale = diagonal if protocol == "scaled" else BUNNY_DIAGONAL  # random_trials scales by scale / BUNNY_DIAGONAL
     dense = np.asarray(dense, dtype=np.float64)
     if dense.ndim != 2 or dense.shape[1] != 3:
         raise InputError(f"dense sample must have shape (n_points, 3), got {dense.shape}")
@@ -187,7 +198,7 @@ def make_trials(dense, n_points, indices, *, root_seed, key, diagonal, max_angle
         rng = np.random.default_rng(job_seed(root_seed, key, index))
         source = dense[rng.choice(len(dense), int(n_points), replace=False)]
         target = dense[rng.choice(len(dense), int(n_points), replace=False)]
-        (trial,) = random_trials(1, rng, diagonal, source.mean(axis=0), max_angle_deg, max_translation)
+        (trial,) = random_trials(1, rng, scale, source.mean(axis=0), max_angle_deg, max_translation)
         setups.append(TrialSetup(int(index), trial, source, target))
     return setups
 

@@ -76,3 +76,17 @@ def test_bad_method_or_missing_mixture_is_an_input_error():
         run_trials("mesh-kmeans", setups, 1.0)
     with pytest.raises(InputError, match="n_points"):
         make_trials(sphere_points(100), 101, [0], root_seed=0, key="k", diagonal=1.0)
+
+
+def test_literal_protocol_draws_the_authors_translations_in_model_units():
+    """The same trial under both protocols: one rotation, the translation scaled by diagonal / the bunny's or not."""
+    dense = sphere_points(500) * 1000.0  # millimetres, diagonal about 2600
+    diagonal = bounding_diagonal(dense)
+    scaled = make_trials(dense, 100, range(3), root_seed=0, key="k", diagonal=diagonal)
+    literal = make_trials(dense, 100, range(3), root_seed=0, key="k", diagonal=diagonal, protocol="literal")
+    for a, b in zip(scaled, literal):
+        np.testing.assert_array_equal(a.trial.rotation, b.trial.rotation)
+        np.testing.assert_allclose(a.trial.translation, b.trial.translation * diagonal / 0.24077, rtol=1e-12)
+        assert np.all(np.abs(b.trial.translation) <= 0.05)
+    with pytest.raises(InputError, match="protocol"):
+        make_trials(dense, 100, [0], root_seed=0, key="k", diagonal=diagonal, protocol="metres")

@@ -101,6 +101,7 @@ rule registration_chunk:
         recorded=REG["recorded_trials"],
         max_angle_deg=REG["max_angle_deg"],
         max_translation=REG["max_translation"],
+        protocol=REG.get("protocol", "scaled"),
         options={"p2d": {"gradient": REG["gradient"]}, "p2d-c2f": {"gradient": REG["gradient"], "scales": C2F_SCALES},
                  "icp": REG["icp"], "cpd": REG["cpd"]},
     log:

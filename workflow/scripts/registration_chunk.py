@@ -17,10 +17,10 @@ diagonal = bounding_diagonal(vertices)
 indices = range(*p.trials)
 setups = make_trials(load_points(smk.input.dense), len(vertices), indices, root_seed=p.seed,
                      key=f"registration/{w.model}/{w.mesh}", diagonal=diagonal, max_angle_deg=p.max_angle_deg,
-                     max_translation=p.max_translation)
+                     max_translation=p.max_translation, protocol=p.protocol)
 mixture = load_model(smk.input.gmm)[0] if "gmm" in smk.input.keys() else None
 params = dict(model=w.model, mesh=w.mesh, method=w.method, chunk=int(w.chunk), trials=list(p.trials),
-              n_points=len(vertices), diagonal=diagonal, options=dict(p.options), root_seed=p.seed)
+              n_points=len(vertices), diagonal=diagonal, protocol=p.protocol, options=dict(p.options), root_seed=p.seed)
 
 recorded = indices[:p.recorded]
 with threadpool_limits(smk.threads), RegistrationRecorder(smk.output.mcap, smk.output.rrd, params=params,
