@@ -367,8 +367,6 @@ def _odometry(args):
     """Frame-to-frame odometry of a TUM folder: the trajectory file, optional recordings, the metrics as JSON."""
     import tempfile
 
-    from tqdm import tqdm
-
     from dgmm.odometry import first_frames, run_odometry
     from dgmm.pixels import parse_intrinsics, sequence_intrinsics
     from dgmm.recording import OdometryRecorder
