@@ -3,31 +3,38 @@
 ``dgmm COMMAND --help`` describes each command with an example. Inputs are any mesh or point cloud trimesh reads
 (ply, obj, off, stl, xyz, ...), read as one of the input kinds of :data:`INPUT_KINDS`; models are ``.npz`` files
 (:mod:`dgmm.model_io`). Every error is one line on stderr, ``dgmm: error: ...``, with exit status 2 for bad
-usage or bad input and 1 for anything else; ``--debug`` adds the traceback.
+usage, bad input and file-system errors (output paths are checked before any work starts), and 1 only for a bug
+in dgmm; ``--debug`` adds the traceback. Ctrl-C exits 130. Outputs are written atomically: a failed or
+interrupted command leaves none behind.
 """
 import argparse
 import json
 import shutil
 import subprocess
 import sys
+import tempfile
 import traceback
-from contextlib import ExitStack
+from contextlib import ExitStack, contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
 from dgmm import __version__
-from dgmm.errors import DataError, DgmmError, InputError
+from dgmm.errors import DataError, DgmmError, FitError, InputError
 from dgmm.variants import INITS, VARIANTS
 
 # numpy, the file readers (trimesh, scipy), the estimator (scikit-learn), registration and the recorders (rerun,
 # mcap) are imported by the commands that use them, so that `dgmm --help` and usage errors answer at once.
 
 BAD_INPUT = 2
-"""Exit status for bad usage (argparse's own) and for bad input: any :class:`~dgmm.errors.DgmmError`."""
+"""Exit status for bad usage (argparse's own), bad input (any :class:`~dgmm.errors.DgmmError`) and file-system
+errors (``OSError``: a file that cannot be read or written)."""
 
 FAILURE = 1
-"""Exit status for any other failure (file system, interrupted viewer, bugs)."""
+"""Exit status for a bug in dgmm (any other exception)."""
+
+INTERRUPTED = 130
+"""Exit status after Ctrl-C (128 + SIGINT, as shells report it)."""
 
 PROGRESS_DELAY = 1.0
 """Seconds a fit runs before its progress bar appears (on a terminal only)."""
@@ -156,6 +163,15 @@ def _open_recorder(stack, mcap, rrd, params, data, seed):
     return None, None
 
 
+@contextmanager
+def _naming(path):
+    """Prefix the InputError or FitError raised in the block with the input file it is about."""
+    try:
+        yield
+    except (InputError, FitError) as exc:
+        raise type(exc)(f"{path}: {exc}") from None
+
+
 def _chain(*callbacks):
     """One EM callback calling each of ``callbacks`` that is not None, in order."""
     active = [callback for callback in callbacks if callback is not None]
@@ -177,17 +193,16 @@ def _fit(args):
                             variant=args.variant, n_jobs=args.jobs)
     if args.memory_limit is not None:
         model.set_params(memory_limit=args.memory_limit * 2**20)
-    n_prims = len(as_primitives(data))
+    with _naming(args.input):
+        n_prims = len(as_primitives(data))
     params = {"dgmm_version": __version__, "input": str(args.input), "as": kind, "n_prims": n_prims,
               **{name: getattr(model, name) for name in _ESTIMATOR_PARAMS}}
     with ExitStack() as stack:
         bar = stack.enter_context(_progress_bar(args.iterations))
         record, finish = _open_recorder(stack, args.mcap, args.rrd, params, data, args.seed)
         model.set_params(callback=_chain(_progress_callback(bar), record))
-        try:
+        with _naming(args.input):
             model.fit(data)
-        except InputError as exc:
-            raise InputError(f"{args.input}: {exc}") from None
         if finish is not None:
             finish(model)
         save_model(args.output, model, {**params, "n_iter": model.n_iter_, "converged": model.converged_,
@@ -201,7 +216,8 @@ def _fit_arguments(parser):
     parser.add_argument("input", type=Path, metavar="INPUT", help="mesh or point cloud file")
     parser.add_argument("-k", "--components", dest="k", type=_positive_int, required=True, metavar="K",
                         help="number of mixture components")
-    parser.add_argument("-o", "--output", type=Path, required=True, metavar="MODEL.npz", help="model file to write")
+    parser.add_argument("-o", "--output", type=_output_file, required=True, metavar="MODEL.npz",
+                        help="model file to write")
     parser.add_argument("--init", choices=INITS, default="kmeans", help="initialisation (default: %(default)s)")
     _kind_argument(parser)
     parser.add_argument("--iterations", type=_positive_int, default=25, metavar="N",
@@ -214,8 +230,10 @@ def _fit_arguments(parser):
     parser.add_argument("--memory-limit", type=_positive_int, metavar="MB",
                         help="MiB of responsibilities EM may hold at once; larger inputs stream in blocks "
                              "(default: 128)")
-    parser.add_argument("--mcap", type=Path, metavar="F", help="record every EM iteration to this MCAP file")
-    parser.add_argument("--rrd", type=Path, metavar="F", help="record the fit to this rerun recording (.rrd)")
+    parser.add_argument("--mcap", type=_output_file, metavar="F",
+                        help="record every EM iteration to this MCAP file")
+    parser.add_argument("--rrd", type=_output_file, metavar="F",
+                        help="record the fit to this rerun recording (.rrd)")
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -228,7 +246,8 @@ def _score(args):
 
     model, _ = load_model(args.model)
     _, data = read_input(args.input, args.kind)
-    print(repr(model.score_primitives(data)))
+    with _naming(args.input):
+        print(repr(model.score_primitives(data)))
 
 
 def _score_arguments(parser):
@@ -315,7 +334,8 @@ def _sample_arguments(parser):
     """Arguments of ``dgmm sample``."""
     parser.add_argument("model", type=Path, metavar="MODEL", help="model file written by dgmm fit")
     parser.add_argument("-n", type=_positive_int, required=True, metavar="N", help="number of points")
-    parser.add_argument("-o", "--output", type=Path, required=True, metavar="OUT.ply", help="PLY file to write")
+    parser.add_argument("-o", "--output", type=_output_file, required=True, metavar="OUT.ply",
+                        help="PLY file to write")
     parser.add_argument("--seed", type=_seed, default=0, metavar="S", help="random seed (default: %(default)s)")
 
 
@@ -432,10 +452,11 @@ def _odometry_arguments(parser):
                              "mixture; 0 fits every frame from k-means with 25 iterations, the paper's protocol "
                              "(default: %(default)s)")
     parser.add_argument("--seed", type=_seed, default=0, metavar="S", help="random seed (default: %(default)s)")
-    parser.add_argument("-o", "--output", type=Path, metavar="TRAJECTORY.txt",
+    parser.add_argument("-o", "--output", type=_output_file, metavar="TRAJECTORY.txt",
                         help="write the estimated trajectory (TUM format, depth timestamps) to this file")
-    parser.add_argument("--mcap", type=Path, metavar="F", help="record every frame and the trajectories to MCAP")
-    parser.add_argument("--rrd", type=Path, metavar="F", help="record the run to this rerun recording (.rrd)")
+    parser.add_argument("--mcap", type=_output_file, metavar="F",
+                        help="record every frame and the trajectories to MCAP")
+    parser.add_argument("--rrd", type=_output_file, metavar="F", help="record the run to this rerun recording (.rrd)")
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -451,6 +472,26 @@ def _positive_int(text):
     if value < 1:
         raise argparse.ArgumentTypeError(f"{text!r} is not an integer >= 1")
     return value
+
+
+def _output_file(text):
+    """argparse type: a file path to write, checked before any work starts.
+
+    It must not be a directory, and its folder must exist and accept a new file (probed with a temporary file,
+    which also catches read-only file systems and missing drives).
+    """
+    path = Path(text)
+    if path.is_dir():
+        raise argparse.ArgumentTypeError(f"{text!r} is a directory: give a file name")
+    folder = path.parent
+    if not folder.is_dir():
+        raise argparse.ArgumentTypeError(f"{text!r}: folder {str(folder)!r} does not exist")
+    try:
+        with tempfile.TemporaryFile(dir=folder):
+            pass
+    except OSError as exc:
+        raise argparse.ArgumentTypeError(f"{text!r}: cannot write in folder {str(folder)!r} ({exc.strerror})")
+    return path
 
 
 def _seed(text):
@@ -531,7 +572,10 @@ def build_parser():
 
 def _describe(exc):
     """One line describing ``exc`` for stderr."""
-    if isinstance(exc, (DgmmError, OSError)):
+    if isinstance(exc, OSError) and exc.strerror:  # "x.npz: Is a directory", not "[Errno 21] Is a directory: ..."
+        names = [str(name) for name in (exc.filename, exc.filename2) if name is not None]
+        text = ": ".join([*names, exc.strerror])
+    elif isinstance(exc, (DgmmError, OSError)):
         text = str(exc)
     else:
         text = f"unexpected {type(exc).__name__}: {exc} (run with --debug for the traceback)"
@@ -549,20 +593,20 @@ def main(argv=None):
     Returns
     -------
     int
-        Exit status: 0 on success, :data:`BAD_INPUT` for bad usage or input, :data:`FAILURE` otherwise (130 when
-        interrupted).
+        Exit status: 0 on success, :data:`BAD_INPUT` for bad usage, input or files, :data:`INTERRUPTED` after
+        Ctrl-C, :data:`FAILURE` for a bug.
     """
     args = build_parser().parse_args(argv)
     try:
         return args.run(args) or 0
-    except KeyboardInterrupt:
+    except KeyboardInterrupt:  # outputs are atomic: unwinding to here has discarded the partial ones
         print("dgmm: interrupted", file=sys.stderr)
-        return 130
+        return INTERRUPTED
     except Exception as exc:  # every failure becomes one line (and the traceback with --debug)
         if args.debug:
             traceback.print_exc()
         print(f"dgmm: error: {_describe(exc)}", file=sys.stderr)
-        return BAD_INPUT if isinstance(exc, DgmmError) else FAILURE
+        return BAD_INPUT if isinstance(exc, (DgmmError, OSError)) else FAILURE
 
 
 if __name__ == "__main__":

@@ -18,4 +18,5 @@ class ConfigError(DgmmError):
 
 
 class FitError(DgmmError):
-    """EM could not continue (for example a covariance that is not positive definite)."""
+    """EM or a registration could not continue (a covariance that is not positive definite, a bound or a cost that
+    is not finite): the message names the iteration and what to change."""

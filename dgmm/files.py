@@ -3,6 +3,8 @@ import os
 from contextlib import contextmanager
 from pathlib import Path
 
+from dgmm.errors import InputError
+
 
 def temporary_path(path):
     """Hidden name beside ``path``, unique to this process, to write to before renaming into place."""
@@ -20,6 +22,8 @@ def atomic_path(path):
     ...     partial.write_text("a,b\\n")
     """
     path = Path(path)
+    if path.is_dir():
+        raise InputError(f"{path} is a directory: give a file name")
     path.parent.mkdir(parents=True, exist_ok=True)
     partial = temporary_path(path)
     try:

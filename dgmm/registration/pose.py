@@ -10,6 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from dgmm.errors import FitError
 from dgmm.registration.checks import as_array, as_points
 from dgmm.registration.rotations import matrix_to_quaternion, quaternion_to_matrix
 
@@ -45,6 +46,14 @@ class Registration:
     objective: float
     converged: bool
     method: str
+
+    def __post_init__(self):
+        """A registration whose cost or pose is not finite is an error, not a pose."""
+        if not (np.isfinite(self.objective) and np.all(np.isfinite(self.rotation))
+                and np.all(np.isfinite(self.translation))):
+            raise FitError(f"{self.method} registration reached a non-finite cost or pose (cost {self.objective}) "
+                           f"after {self.iterations} iterations: check that source and target are in the same "
+                           f"units and overlap")
 
     @property
     def quaternion(self):

@@ -21,7 +21,7 @@ from functools import partial
 import numpy as np
 from scipy.optimize import minimize
 
-from dgmm.errors import InputError
+from dgmm.errors import FitError, InputError
 from dgmm.registration.pose import Registration, pose_from_params
 from dgmm.registration.rotations import LEVI_CIVITA, exp_rotation
 
@@ -68,11 +68,23 @@ def minimise_bfgs(method, cost, centre, length, x0, gradient, callback, options)
     start = time.perf_counter()
     unit = np.array([length if length > 0 else 1.0] * 3 + [1.0] * 4)
 
+    evaluations = 0
+
     def scaled_cost(x, with_grad):
-        if not with_grad:
-            return cost(x * unit, with_grad=False)
-        value, grad = cost(x * unit, with_grad=True)
-        return value, grad * unit
+        nonlocal evaluations
+        evaluations += 1
+        failure = FitError(f"{method} registration: the cost or its gradient stopped being finite (BFGS, cost "
+                           f"evaluation {evaluations}): check that source and target are in the same units and "
+                           f"overlap")
+        if not np.all(np.isfinite(x)):  # only a non-finite cost or gradient leads BFGS here
+            raise failure
+        try:
+            value, grad = cost(x * unit, with_grad=True) if with_grad else (cost(x * unit, with_grad=False), 0.0)
+        except InputError:  # the inputs were checked: it is BFGS's iterate that degenerated (a zero quaternion)
+            raise failure from None
+        if not (np.isfinite(value) and np.all(np.isfinite(grad))):
+            raise failure
+        return (value, grad * unit) if with_grad else value
 
     def snapshot(params, value, iterations, converged):
         rotation, translation = pose_from_params(params * unit, centre)
@@ -189,6 +201,9 @@ def minimise_gauss_newton(method, evaluate, centre, length, rotation, translatio
     iteration = 0
     while iteration < max_iter and not converged:
         gradient, hessian, exact = derivatives()
+        if not (np.isfinite(cost) and np.all(np.isfinite(gradient)) and np.all(np.isfinite(hessian))):
+            raise FitError(f"{method} registration: the cost or its derivatives are not finite at Gauss-Newton "
+                           f"iteration {iteration}: check that source and target are in the same units and overlap")
         newton = exact is not None and _positive_definite(exact)
         if newton:
             hessian = exact
