@@ -113,11 +113,8 @@ def read_input(path, kind=None):
         return kind, INPUT_KINDS[kind][0](path)
     try:
         return "mesh", _read_mesh(path)
-    except DataError as mesh_error:
-        try:
-            return "points", _read_points(path)
-        except DataError:
-            raise mesh_error from None
+    except DataError:  # not a mesh: a point cloud, whose own error is the one to show
+        return "points", _read_points(path)
 
 
 # ---------------------------------------------------------------------------------------------------------

@@ -201,8 +201,10 @@ def load_points(path):
         points = np.asarray(cloud.vertices, dtype=float)
     except Exception as exc:  # as in load_mesh
         raise DataError(f"{path}: cannot read points ({type(exc).__name__}: {exc})") from None
-    if points.ndim != 2 or points.shape[1] != 3 or len(points) == 0 or not np.all(np.isfinite(points)):
-        raise DataError(f"{path}: no finite 3-D points")
+    if points.ndim != 2 or points.shape[1] != 3 or len(points) == 0:
+        raise DataError(f"{path}: no 3-D points")
+    if not np.all(np.isfinite(points)):
+        raise DataError(f"{path}: points contain NaN or infinite coordinates")
     return points
 
 

@@ -89,6 +89,15 @@ def _check_bound(bound):
                        f"float64; increase reg_covar or reduce n_components")
 
 
+def _finite_mean(log_likelihoods, weights=None):
+    """Their (weighted) mean as a float, or an InputError if it overflows float64."""
+    with np.errstate(over="ignore"):
+        mean = float(np.average(log_likelihoods, weights=weights))
+    if not np.isfinite(mean):
+        raise InputError(f"the mean log-likelihood is beyond float64 ({mean}): the input lies too far from the mixture")
+    return mean
+
+
 def _check_array(name, value, shape):
     """``value`` as a finite float64 array of ``shape``, or an InputError naming it."""
     array = np.asarray(value, dtype=np.float64)
@@ -535,7 +544,7 @@ class GaussianMixture(BaseEstimator):
 
     def score(self, X, y=None):
         """Mean log-likelihood of the points."""
-        return float(self.score_samples(X).mean())
+        return _finite_mean(self.score_samples(X))
 
     def primitive_bounds(self, X):
         """Per-primitive bound ``logsumexp_i(log lambda_i + E_p[log N_i])``, shape (n_prims,).
@@ -551,7 +560,7 @@ class GaussianMixture(BaseEstimator):
         of the surface-averaged log-likelihood.
         """
         prims = as_primitives(X)
-        return float(np.average(self._log_norm(prims), weights=prims.weights))
+        return _finite_mean(self._log_norm(prims), prims.weights)
 
     def predict(self, X):
         """Index of the most responsible component for each point or primitive."""
