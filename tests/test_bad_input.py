@@ -188,7 +188,8 @@ def listing(folder):
     return sorted(path.relative_to(folder) for path in folder.rglob("*"))
 
 
-@pytest.mark.parametrize("name", CASES)
+@pytest.mark.parametrize("name", [pytest.param(name, marks=pytest.mark.slow) if isinstance(case, Cli) else name
+                                  for name, case in CASES.items()])  # CLI cases start a process each
 def test_bad_input_contract(name, inputs, tmp_path):
     case = CASES[name]
     out = tmp_path / "out"
@@ -216,6 +217,7 @@ def test_every_command_has_cases():
     assert covered == set(cli.COMMANDS)
 
 
+@pytest.mark.slow
 def test_ctrl_c_exits_130_and_leaves_no_output(tmp_path):
     """SIGINT once the fit's recordings exist as partial files: exit 130, one line, nothing left behind."""
     args = ["fit", SHARED_DATA / "stanford" / "bunny_res2.ply", "-k", 100, "--init", "random", "--iterations", 100000,
