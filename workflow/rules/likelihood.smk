@@ -27,7 +27,7 @@ rule fig2:
     input:
         mesh=f"{DATA_DIR}/{FIG2['model']}/{FIG2['mesh']}.ply",
     output:
-        table=f"{RESULTS}/tables/fig2.csv",
+        table=report(f"{RESULTS}/tables/fig2.csv", caption="../report/fig2_table.rst", category="Tables"),
         mcap=f"{RESULTS}/fig2/fit.mcap",
         rrd=f"{RESULTS}/fig2/fit.rrd",
     params:
