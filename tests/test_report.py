@@ -5,6 +5,7 @@ import re
 import shutil
 import subprocess
 import sys
+import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -396,3 +397,20 @@ def test_odometry_claim():
     claim = claims.odometry(claims.Measurements(odometry=rows))
     assert "wins 1 of 2" in claim.evidence and claim.verdict == "partly"  # beats ICP, not the point GMM
     assert claims.odometry(claims.Measurements()).verdict == "pending"
+
+
+@pytest.mark.slow
+def test_report_zip_carries_every_report_output(built):
+    """`snakemake --report report.zip` holds every file the rules mark as report output: Table 1, each figure, Fig 2's
+    table and Fig 6."""
+    out, first, drawn = built
+    workdir = out.parent
+    command = [str(SNAKEMAKE), "--snakefile", str(REPO / "Snakefile"), "--directory", str(workdir),
+               "--configfile", str(workdir / "config.yaml"), "--report", str(workdir / "report.zip")]
+    run = subprocess.run(command, capture_output=True, text=True, timeout=300, check=False)
+    assert run.returncode == 0, run.stderr[-3000:]
+    with zipfile.ZipFile(workdir / "report.zip") as archive:
+        names = {Path(name).name for name in archive.namelist()}
+    expected = {"table1.csv", "fig2.csv"} | {f"{name}.png" for name in drawn if name != "fig6"}
+    expected |= {"fig6.png"} if "fig6" in drawn else set()
+    assert expected <= names, sorted(expected - names)

@@ -1,15 +1,187 @@
-# Config validation and helpers shared by every rule file.
-# Every rule declares resources: (mem_mb, runtime in minutes, cpus_per_task) for cluster schedulers: measured peaks
+# Config validation, the paths every stage shares and the input functions of the rules (Snakemake's catalogue
+# layout: the stage files hold rules only, the functions they call live here).
+# Every job declares resources (mem_mb, runtime in minutes, cpus_per_task) for cluster schedulers: measured peaks
 # (benchmarks/job_resources.py, README "Running on a Slurm cluster") with about 2x memory and 15x time headroom.
+import os
+
 from snakemake.utils import validate
 
+from dgmm.data import REGISTRY
+from dgmm.report import figure_names
+from dgmm.sweep import parse_input, variants_for
+from dgmm.trials import METHODS, mixture_source
 
 validate(config, schema="../schemas/config.schema.yaml")
 
 RESULTS = config.get("results", "results")
+DATA = config["data"]
+DATA_DIR = f"{RESULTS}/data"
+FIT = config["fit"]
+REG = config["registration"]
+ODO = config["odometry"]
+ODO_DIR = f"{RESULTS}/odometry"
+SYNTHETIC_SEQUENCE = f"{ODO_DIR}/synthetic/sequence"
+REPORT_DIR = config.get("report", {}).get("dir", "reports")
+PICTURE_BUDGET = 1000  # Fig 7 shows the paper's 1000-primitive decimations and samples
 
 
 def get_final_output():
-    """Every target of `rule all`: the outputs of each stage."""
-    return [*rules.data.input, *rules.fits.input, *rules.registration.input, *rules.odometry.input,
-            *rules.report.output]
+    """Every target of the workflow's default target: the outputs of each stage."""
+    return [
+        *rules.data.input,
+        *rules.fits.input,
+        *rules.registration.input,
+        *rules.odometry.input,
+        *rules.report.output,
+    ]
+
+
+# Data stage
+
+
+def data_dir(path):
+    """A configured directory: "~" expanded, relative paths taken from the repository root (not the working dir)."""
+    return os.path.normpath(os.path.join(workflow.basedir, os.path.expanduser(path)))
+
+
+def data_targets():
+    """Every file the data stage builds for the configured models."""
+    targets = []
+    for model in DATA["models"]:
+        for mesh in REGISTRY[model]:
+            targets += [f"{DATA_DIR}/{model}/{mesh}.ply", f"{DATA_DIR}/{model}/{mesh}_eval.ply"]
+        targets += expand(
+            f"{DATA_DIR}/{model}/{{method}}{{budget}}.ply", method=DATA["methods"], budget=DATA["budgets"]
+        )
+    return targets
+
+
+# Fitting sweep
+
+
+def fit_jobs():
+    """(model, input, variant, K, init) of every configured fit, each once."""
+    jobs = set()
+    for experiment in FIT["experiments"].values():
+        for model in experiment["models"]:
+            for input_name in experiment["inputs"]:
+                for variant in variants_for(input_name, FIT["variants"]):
+                    for k in experiment["components"]:
+                        for init in experiment["inits"]:
+                            jobs.add((model, input_name, variant, k, init))
+    return sorted(jobs)
+
+
+def fit_outputs(name):
+    """File ``name`` of every configured fit job."""
+    return [f"{RESULTS}/fits/{m}/{i}/{v}/k{k}-{n}/{name}" for m, i, v, k, n in fit_jobs()]
+
+
+def fit_input(wildcards):
+    """The fitted data file: the input's source mesh or its reduction."""
+    return f"{DATA_DIR}/{wildcards.model}/{parse_input(wildcards.input)[0]}.ply"
+
+
+def evaluation_set(wildcards):
+    """Fig 3 inputs (made from res4) are scored on res4's evaluation set, all others on the full model's."""
+    source = parse_input(wildcards.input)[0]
+    mesh = source if source in ("full", "res4") else "full"
+    return f"{DATA_DIR}/{wildcards.model}/{mesh}_eval.ply"
+
+
+# Registration
+
+
+def registration_experiments():
+    """(model, mesh) -> (trials, methods) over every experiment; an experiment repeated on the same mesh takes
+    the most trials and every method (trials are the same for every experiment, see dgmm.trials)."""
+    jobs = {}
+    for experiment in REG["experiments"].values():
+        for model in experiment["models"]:
+            trials, methods = jobs.get((model, experiment["mesh"]), (0, []))
+            methods = methods + [m for m in experiment["methods"] if m not in methods]
+            jobs[model, experiment["mesh"]] = (max(trials, experiment["trials"]), methods)
+    return jobs
+
+
+REG_EXPERIMENTS = registration_experiments()
+
+
+def chunk_range(wildcards):
+    """[first, stop) trials of a chunk."""
+    n_trials, size = REG_EXPERIMENTS[wildcards.model, wildcards.mesh][0], REG["trials_per_chunk"]
+    first = int(wildcards.chunk) * size
+    return [first, min(n_trials, first + size)]
+
+
+def registration_outputs(name):
+    """Path of file ``name`` of every configured chunk, ordered by model, mesh, configured method, chunk."""
+    size = REG["trials_per_chunk"]
+    return [
+        f"{RESULTS}/registration/{model}/{mesh}/{method}/c{chunk}/{name}"
+        for (model, mesh), (n_trials, methods) in sorted(REG_EXPERIMENTS.items())
+        for method in methods
+        for chunk in range(-(-n_trials // size))
+    ]
+
+
+def dense_sample(wildcards):
+    """Evaluation set of the mesh's origin: a registered mesh's own (bunny res4), else the full model's."""
+    origin = wildcards.mesh if wildcards.mesh in REGISTRY[wildcards.model] else "full"
+    return f"{DATA_DIR}/{wildcards.model}/{origin}_eval.ply"
+
+
+def registration_mixture(wildcards):
+    """The method's fitted mixture, for the methods that use one (``*-c2f``: its paper P2D's)."""
+    if not METHODS[wildcards.method].needs_mixture:
+        return {}
+    source = mixture_source(wildcards.method)
+    return {"gmm": f"{RESULTS}/registration/{wildcards.model}/{wildcards.mesh}/{source}/gmm.npz"}
+
+
+# Visual odometry
+
+
+def odometry_sequence():
+    """(name, folder) of the sequence to run: the configured TUM folder when it exists, else the synthetic one."""
+    folder = data_dir(ODO["sequence"])
+    if os.path.isdir(folder):
+        return os.path.basename(folder.rstrip(os.sep)), folder
+    return "synthetic", SYNTHETIC_SEQUENCE
+
+
+ODO_SEQUENCE, ODO_FOLDER = odometry_sequence()
+
+
+def odometry_outputs(name):
+    """File ``name`` of every configured method's job, in the configured order."""
+    return [f"{ODO_DIR}/{ODO_SEQUENCE}/{method}/{name}" for method in ODO["methods"]]
+
+
+# Report
+
+
+def report_inputs():
+    """Named inputs of the report: the tables of the configured stages and the bunny files the pictures use."""
+    inputs = {"likelihood": rules.likelihood_table.output.likelihood, "fig2": rules.fig2.output.table}
+    if "registration" in config:
+        inputs["registration"] = rules.registration_table.output.errors
+    if "odometry" in config:
+        inputs.update(odometry=f"{RESULTS}/tables/odometry.csv", fig6=f"{RESULTS}/odometry/fig6.png")
+    if "bunny" in DATA["models"]:
+        inputs.update(
+            res4=f"{DATA_DIR}/bunny/res4.ply",
+            full=f"{DATA_DIR}/bunny/full.ply",
+            dense=f"{DATA_DIR}/bunny/full_eval.ply",
+        )
+        if PICTURE_BUDGET in DATA["budgets"]:
+            inputs.update({method: f"{DATA_DIR}/bunny/{method}{PICTURE_BUDGET}.ply" for method in DATA["methods"]})
+    return inputs
+
+
+def report_figures():
+    """Names of the figures the configured stages allow."""
+    configured = {name for e in FIT["experiments"].values() if "bunny" in e["models"] for name in e["inputs"]}
+    if "registration" in config:
+        configured |= {f"{model}/{mesh}" for model, mesh in REG_EXPERIMENTS}
+    return figure_names(report_inputs(), configured)

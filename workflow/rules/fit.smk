@@ -4,35 +4,7 @@
 #   seconds.csv  wall time of each seed's fit (kept apart so that scores stay byte-identical across runs)
 #   fit.mcap     per-iteration bounds and times of every seed, the run's parameters, final mixtures (Foxglove)
 #   fit.rrd      the first seed's input and its mixture at every EM iteration (`rerun fit.rrd` replays it)
-from dgmm.sweep import parse_input, variants_for
-
-FIT = config["fit"]
 FIT_DIR = f"{RESULTS}/fits/{{model}}/{{input}}/{{variant}}/k{{k}}-{{init}}"
-
-
-def fit_jobs():
-    """(model, input, variant, K, init) of every configured fit, each once."""
-    jobs = set()
-    for experiment in FIT["experiments"].values():
-        for model in experiment["models"]:
-            for input_name in experiment["inputs"]:
-                for variant in variants_for(input_name, FIT["variants"]):
-                    for k in experiment["components"]:
-                        for init in experiment["inits"]:
-                            jobs.add((model, input_name, variant, k, init))
-    return sorted(jobs)
-
-
-def fit_outputs(name):
-    pattern = FIT_DIR.replace("{{", "{").replace("}}", "}") + f"/{name}"
-    return [pattern.format(model=m, input=i, variant=v, k=k, init=n) for m, i, v, k, n in fit_jobs()]
-
-
-def evaluation_set(wildcards):
-    """Fig 3 inputs (made from res4) are scored on res4's evaluation set, all others on the full model's."""
-    source = parse_input(wildcards.input)[0]
-    mesh = source if source in ("full", "res4") else "full"
-    return f"{DATA_DIR}/{wildcards.model}/{mesh}_eval.ply"
 
 
 wildcard_constraints:
@@ -44,19 +16,13 @@ wildcard_constraints:
 
 rule fit:
     input:
-        data=lambda w: f"{DATA_DIR}/{w.model}/{parse_input(w.input)[0]}.ply",
+        data=fit_input,
         evaluation=evaluation_set,
     output:
         scores=f"{FIT_DIR}/scores.csv",
         seconds=f"{FIT_DIR}/seconds.csv",
         mcap=f"{FIT_DIR}/fit.mcap",
         rrd=f"{FIT_DIR}/fit.rrd",
-    params:
-        seed=config["seed"],
-        seeds=FIT["seeds"],
-        max_iter=FIT["max_iter"],
-        tol=FIT["tol"],
-        reg_covar=FIT["reg_covar"],
     log:
         f"{RESULTS}/logs/fits/{{model}}/{{input}}/{{variant}}/k{{k}}-{{init}}.log",
     threads: 1
@@ -64,5 +30,11 @@ rule fit:
         mem_mb=1000,
         runtime=5,
         cpus_per_task=1,
+    params:
+        seed=config["seed"],
+        seeds=FIT["seeds"],
+        max_iter=FIT["max_iter"],
+        tol=FIT["tol"],
+        reg_covar=FIT["reg_covar"],
     script:
         "../scripts/fit.py"

@@ -30,12 +30,6 @@ rule fig2:
         table=report(f"{RESULTS}/tables/fig2.csv", caption="../report/fig2_table.rst", category="Tables"),
         mcap=f"{RESULTS}/fig2/fit.mcap",
         rrd=f"{RESULTS}/fig2/fit.rrd",
-    params:
-        seed=config["seed"],
-        fig2=FIG2,
-        max_iter=FIT["max_iter"],
-        tol=FIT["tol"],
-        reg_covar=FIT["reg_covar"],
     log:
         f"{RESULTS}/logs/fig2.log",
     threads: 1
@@ -43,6 +37,12 @@ rule fig2:
         mem_mb=1000,
         runtime=5,
         cpus_per_task=1,
+    params:
+        seed=config["seed"],
+        fig2=FIG2,
+        max_iter=FIT["max_iter"],
+        tol=FIT["tol"],
+        reg_covar=FIT["reg_covar"],
     script:
         "../scripts/fig2.py"
 

@@ -9,31 +9,11 @@
 #   odometry.mcap    per-frame timings, the estimated and ground-truth trajectories (foxglove.PosesInFrame)
 #   odometry.rrd     the camera path and each frame's mixture (or ICP points) on the timeline `frame`
 # and results/tables/odometry.csv (ATE), odometry_seconds.csv (mean timings), results/odometry/fig6.png.
-import os
 import re
 
 from dgmm.odometry import METHODS as ODOMETRY_METHODS
 
-ODO = config["odometry"]
-ODO_DIR = f"{RESULTS}/odometry"
-SYNTHETIC_SEQUENCE = f"{ODO_DIR}/synthetic/sequence"
-
-
-def odometry_sequence():
-    """(name, folder) of the sequence to run: the configured TUM folder when it exists, else the synthetic one."""
-    folder = data_dir(ODO["sequence"])
-    if os.path.isdir(folder):
-        return os.path.basename(folder.rstrip(os.sep)), folder
-    return "synthetic", SYNTHETIC_SEQUENCE
-
-
-ODO_SEQUENCE, ODO_FOLDER = odometry_sequence()
 ODO_JOB = f"{ODO_DIR}/{{sequence}}/{{method}}"
-
-
-def odometry_outputs(name):
-    """File ``name`` of every configured method's job, in the configured order."""
-    return [f"{ODO_DIR}/{ODO_SEQUENCE}/{method}/{name}" for method in ODO["methods"]]
 
 
 rule odometry_synthetic:
@@ -41,9 +21,6 @@ rule odometry_synthetic:
         meshes=[f"{DATA_DIR}/{mesh}.ply" for mesh in ODO["synthetic"]["meshes"]],
     output:
         sequence=directory(SYNTHETIC_SEQUENCE),
-    params:
-        frames=ODO["frames"],
-        seed=config["seed"],
     log:
         f"{RESULTS}/logs/odometry/synthetic.log",
     threads: 1
@@ -51,14 +28,14 @@ rule odometry_synthetic:
         mem_mb=1000,
         runtime=60,
         cpus_per_task=1,
+    params:
+        frames=ODO["frames"],
+        seed=config["seed"],
     script:
         "../scripts/odometry_synthetic.py"
 
 
 rule odometry_run:
-    wildcard_constraints:
-        sequence=re.escape(ODO_SEQUENCE),
-        method="|".join(ODOMETRY_METHODS),
     input:
         sequence=ODO_FOLDER,
     output:
@@ -67,6 +44,16 @@ rule odometry_run:
         seconds=f"{ODO_JOB}/seconds.csv",
         mcap=f"{ODO_JOB}/odometry.mcap",
         rrd=f"{ODO_JOB}/odometry.rrd",
+    log:
+        f"{RESULTS}/logs/odometry/{{sequence}}/{{method}}.log",
+    wildcard_constraints:
+        sequence=re.escape(ODO_SEQUENCE),
+        method="|".join(ODOMETRY_METHODS),
+    threads: 1
+    resources:
+        mem_mb=1500,
+        runtime=240,
+        cpus_per_task=1,
     params:
         seed=config["seed"],
         frames=ODO["frames"],
@@ -74,13 +61,6 @@ rule odometry_run:
         max_iter=ODO["max_iter"],
         pixel_size=ODO["pixel_size"],
         icp_points=ODO["icp_points"],
-    log:
-        f"{RESULTS}/logs/odometry/{{sequence}}/{{method}}.log",
-    threads: 1
-    resources:
-        mem_mb=1500,
-        runtime=240,
-        cpus_per_task=1,
     script:
         "../scripts/odometry.py"
 
@@ -105,13 +85,13 @@ rule odometry_figure:
         trajectories=odometry_outputs("trajectory.txt"),
     output:
         png=report(f"{ODO_DIR}/fig6.png", caption="../report/odometry_fig6.rst", category="Figures"),
+    log:
+        f"{RESULTS}/logs/odometry/fig6.log",
+    threads: 1
     params:
         methods=ODO["methods"],
         sequence=ODO_SEQUENCE,
         plane=ODO["plane"],
-    log:
-        f"{RESULTS}/logs/odometry/fig6.log",
-    threads: 1
     script:
         "../scripts/odometry_figure.py"
 
