@@ -11,8 +11,10 @@ registers with the determinant-free D2D cost; ``"gmm-points"`` does the same wit
 ``"icp"`` runs point-to-point ICP on 2,500 points drawn at random from each frame's back-projection.
 
 EM start (``warm_iter``): the paper's protocol fits every frame from a k-means start (``max_iter`` iterations);
-with ``warm_iter`` set, every frame after the first starts from the previous frame's mixture and runs
-``warm_iter`` iterations, several times cheaper since the camera moves little between frames.
+with ``warm_iter`` set, every frame after the first starts from the previous frame's mixture (its starved
+components restarted on the data) and runs ``warm_iter`` iterations, several times cheaper since the camera moves
+little between frames, at a cost in drift (fr1/xyz, first 100 frames: ATE 0.037 m at 5 iterations against the
+protocol's 0.018 m).
 """
 from __future__ import annotations
 
@@ -30,15 +32,42 @@ from dgmm.tum import MAX_TIME_DIFFERENCE, Trajectory
 
 
 # ---------------------------------------------------------------------------------------------- odometry
+STARVED_WEIGHT = 0.1
+"""Warm start: a component of the previous frame's mixture whose weight is below ``STARVED_WEIGHT / K`` restarts."""
+
+
+def _warm_start(mixture, prims, rng):
+    """The previous frame's mixture as this frame's EM start, every starved component (weight below
+    ``STARVED_WEIGHT / K``) restarted at a primitive drawn by size, with the live components' median covariance
+    and weight ``1 / K``.
+
+    Without the restart a component that loses its primitives (the scene leaves the view, or its neighbours win
+    them) keeps a weight near 0 and the ``reg_covar`` covariance for good: on fr1/xyz the effective number of
+    components ``1 / Σ π²`` falls from 79 to 7 within 55 frames and D2D loses its grip.
+    """
+    k = len(mixture.weights_)
+    weights, means, covariances = mixture.weights_.copy(), mixture.means_.copy(), mixture.covariances_.copy()
+    starved = weights < STARVED_WEIGHT / k
+    if starved.any():
+        picks = rng.choice(len(prims), size=int(starved.sum()), p=prims.weights / prims.weights.sum())
+        means[starved] = prims.means[picks]
+        covariances[starved] = np.median(covariances[~starved], axis=0)
+        weights[starved] = 1.0 / k
+        weights /= weights.sum()
+    return weights, means, np.linalg.inv(covariances)
+
+
 def _fit_mixture(prims, rng, previous, options):
-    """The frame's K-component GMM: from a k-means start seeded by ``rng``, or from ``previous`` (warm start)."""
+    """The frame's K-component GMM: from a k-means start seeded by ``rng``, or from ``previous`` (warm start).
+
+    ``previous`` is the previous frame's mixture or ``None`` (see :func:`_warm_start`).
+    """
     common = dict(variant=options["variant"], random_state=rng)
     if previous is None or options["warm_iter"] is None:
         return GaussianMixture(options["n_components"], max_iter=options["max_iter"], **common).fit(prims)
-    factors = previous.precisions_cholesky_
-    return GaussianMixture(options["n_components"], max_iter=options["warm_iter"], weights_init=previous.weights_,
-                           means_init=previous.means_, precisions_init=factors @ np.transpose(factors, (0, 2, 1)),
-                           **common).fit(prims)
+    weights, means, precisions = _warm_start(previous, prims, rng)
+    return GaussianMixture(options["n_components"], max_iter=options["warm_iter"], weights_init=weights,
+                           means_init=means, precisions_init=precisions, **common).fit(prims)
 
 
 def _prepare_pixels(depth, intrinsics, rng, previous, options):

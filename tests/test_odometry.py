@@ -247,3 +247,24 @@ def test_bad_input_names_the_file(sequence, tmp_path):
         broken_sequence.depth(1)
     for caught in (missing, no_listing, unreadable, eight_bit):
         assert "\n" not in str(caught.value)
+
+
+def test_warm_start_restarts_starved_components():
+    """A component that lost its primitives restarts on the data (at a primitive, live median covariance, weight
+    1/K); live components keep their parameters and the weights still sum to 1."""
+    from types import SimpleNamespace
+
+    from dgmm.odometry import _warm_start
+    from dgmm.primitives import Primitives
+
+    covariances = np.stack([np.diag([1.0, 2.0, 3.0]), np.diag([2.0, 2.0, 2.0]), np.diag([1e-6, 1e-6, 1e-6])])
+    mixture = SimpleNamespace(weights_=np.array([0.6, 0.4 - 1e-9, 1e-9]), means_=np.array([[0., 0, 0], [1, 1, 1],
+                                                                                              [50, 50, 50]]),
+                              covariances_=covariances)
+    prims = Primitives.from_points(np.random.default_rng(0).normal(size=(30, 3)))
+    weights, means, precisions = _warm_start(mixture, prims, np.random.default_rng(1))
+    np.testing.assert_allclose(weights, np.array([0.6, 0.4, 1 / 3]) / (1 + 1 / 3), rtol=1e-7)
+    np.testing.assert_array_equal(means[:2], mixture.means_[:2])
+    assert any(np.array_equal(means[2], point) for point in prims.means)
+    np.testing.assert_allclose(np.linalg.inv(precisions[2]), np.diag([1.5, 2.0, 2.5]))
+    np.testing.assert_allclose(np.linalg.inv(precisions[:2]), covariances[:2])
