@@ -428,7 +428,8 @@ def _odometry(args):
                              header=f"dgmm {args.method} odometry of {name}, intrinsics {camera}")
     seconds = float(result.prepare_seconds.mean() + result.registration_seconds.mean())
     print(json.dumps({"sequence": name, "method": args.method, "variant": args.variant, "intrinsics": camera,
-                      "frames": n_frames, **metrics, "seconds_per_frame": seconds}))
+                      "frames": n_frames, **metrics, "seconds_per_frame": seconds,
+                      "cpu_seconds_per_frame": float(result.cpu_seconds.mean())}))
 
 
 def _odometry_arguments(parser):

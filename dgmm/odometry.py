@@ -96,6 +96,29 @@ METHODS = {
 }
 
 
+MIXTURE_METHODS = ("gmm-pixels", "gmm-points")
+"""The methods that fit a GMM per frame, and so run with an EM ``variant``."""
+
+
+def odometry_runs(methods, variants):
+    """The (method, variant) pairs of a sweep, named as its jobs' folders.
+
+    Parameters
+    ----------
+    methods : sequence of str
+        Keys of ``METHODS``.
+    variants : sequence of str
+        EM variants of the mixture methods (ICP has none).
+
+    Returns
+    -------
+    runs : dict of str to (str, str)
+        ``"gmm-pixels-textbook" -> ("gmm-pixels", "textbook")`` …, ``"icp" -> ("icp", "")``, in the given order.
+    """
+    return {f"{method}-{variant}" if variant else method: (method, variant)
+            for method in methods for variant in (variants if method in MIXTURE_METHODS else [""])}
+
+
 @dataclass(frozen=True)
 class OdometryFrame:
     """What the odometry loop knows after a frame, handed to ``callback``.
@@ -140,6 +163,9 @@ class Odometry:
         Per-frame registration time (``Registration.seconds``).
     registrations : tuple of Registration
         Frame ``k+1`` onto frame ``k``, ``n_frames - 1`` of them.
+    cpu_seconds : ndarray of shape (n_frames,)
+        Per-frame CPU time of this process (``time.process_time``) for the model and its registration: on a
+        shared machine the wall times above count other processes' work too.
     """
 
     method: str
@@ -147,6 +173,7 @@ class Odometry:
     prepare_seconds: np.ndarray
     registration_seconds: np.ndarray
     registrations: tuple
+    cpu_seconds: np.ndarray
 
 
 def run_odometry(sequence, method, frames=None, *, intrinsics=FR3, n_components=100, max_iter=25, warm_iter=None,
@@ -199,16 +226,17 @@ def run_odometry(sequence, method, frames=None, *, intrinsics=FR3, n_components=
     options = {"n_components": n_components, "max_iter": max_iter, "warm_iter": warm_iter, "variant": variant,
                "size": size, "n_icp_points": n_icp_points}
     rotations, translations = [np.eye(3)], [np.zeros(3)]
-    previous, prepare_seconds, registrations = None, [], []
+    previous, prepare_seconds, registrations, cpu_seconds = None, [], [], []
     for index in indices:  # sequential by nature: each pose composes the previous one
         depth = sequence.depth(index)
         if depth.shape != (intrinsics.height, intrinsics.width):
             raise DataError(f"{sequence.depth_files[index]}: {depth.shape[1]}x{depth.shape[0]} image, the "
                             f"intrinsics are for {intrinsics.width}x{intrinsics.height}")
-        start = time.perf_counter()
+        start, cpu_start = time.perf_counter(), time.process_time()
         model = prepare(depth, intrinsics, np.random.default_rng([seed, int(index)]), previous, options)
         prepare_seconds.append(time.perf_counter() - start)
         registration = None if previous is None else register(previous, model)
+        cpu_seconds.append(time.process_time() - cpu_start)
         if registration is not None:  # T_{k+1} = T_k (T_k⁻¹ T_{k+1})
             registrations.append(registration)
             translations.append(rotations[-1] @ registration.translation + translations[-1])
@@ -219,7 +247,7 @@ def run_odometry(sequence, method, frames=None, *, intrinsics=FR3, n_components=
         previous = model
     trajectory = Trajectory(sequence.depth_timestamps[indices], np.array(rotations), np.array(translations))
     return Odometry(method, trajectory, np.array(prepare_seconds), np.array([r.seconds for r in registrations]),
-                    tuple(registrations))
+                    tuple(registrations), np.array(cpu_seconds))
 
 
 # ------------------------------------------------------------------------------------------------ tables
@@ -262,13 +290,14 @@ def frame_seconds(odometry):
     -------
     rows : list of dict
         One per frame: ``frame`` (position in the run), ``timestamp``, ``model_seconds`` (GMM fit, or ICP's
-        point sample) and ``registration_seconds`` (onto the previous frame; ``""`` for the first frame).
+        point sample), ``registration_seconds`` (onto the previous frame; ``""`` for the first frame) and
+        ``cpu_seconds`` (both, CPU time of this process).
     """
     registration = ["", *odometry.registration_seconds.tolist()]
     return [{"frame": index, "timestamp": f"{timestamp:.6f}", "model_seconds": float(model),
-             "registration_seconds": registered}
-            for index, (timestamp, model, registered) in enumerate(
-                zip(odometry.trajectory.timestamps, odometry.prepare_seconds, registration))]
+             "registration_seconds": registered, "cpu_seconds": float(cpu)}
+            for index, (timestamp, model, registered, cpu) in enumerate(
+                zip(odometry.trajectory.timestamps, odometry.prepare_seconds, registration, odometry.cpu_seconds))]
 
 
 def seconds_summary(rows):
@@ -278,12 +307,16 @@ def seconds_summary(rows):
     -------
     summary : dict
         ``frames``; ``mean_model_seconds`` (over frames), ``mean_registration_seconds`` (over registrations) and
-        ``mean_seconds_per_frame``, their sum: the cost of adding one frame to the trajectory.
+        ``mean_seconds_per_frame``, their sum: the cost of adding one frame to the trajectory;
+        ``mean_cpu_seconds_per_frame`` (over frames) when the rows have ``cpu_seconds``.
     """
     model = [float(row["model_seconds"]) for row in rows]
     registration = [float(row["registration_seconds"]) for row in rows if row["registration_seconds"] != ""]
     if not model or not registration:
         raise InputError(f"timings of {len(rows)} frames: need at least one registration")
     mean_model, mean_registration = float(np.mean(model)), float(np.mean(registration))
-    return {"frames": len(model), "mean_seconds_per_frame": mean_model + mean_registration,
-            "mean_model_seconds": mean_model, "mean_registration_seconds": mean_registration}
+    summary = {"frames": len(model), "mean_seconds_per_frame": mean_model + mean_registration,
+               "mean_model_seconds": mean_model, "mean_registration_seconds": mean_registration}
+    if "cpu_seconds" in rows[0]:
+        summary["mean_cpu_seconds_per_frame"] = float(np.mean([float(row["cpu_seconds"]) for row in rows]))
+    return summary

@@ -18,77 +18,89 @@ PLANES = {"xy": (0, 1), "xz": (0, 2), "yz": (1, 2)}
 """Top-down plane name -> the two world axes drawn (horizontal, vertical)."""
 
 METHOD_STYLE = {
-    "gmm-pixels": ("GMM, pixel primitives", "tab:blue", "-"),
-    "gmm-points": ("GMM, points", "tab:orange", "--"),
-    "icp": ("ICP", "tab:red", ":"),
+    "gmm-pixels": ("GMM, pixel primitives", "tab:blue"),
+    "gmm-points": ("GMM, points", "tab:orange"),
+    "icp": ("ICP", "tab:red"),
 }
-"""Odometry method -> (legend label, colour, line style); other names are drawn with matplotlib's defaults."""
+"""Odometry method -> (legend label, colour); other names are drawn with matplotlib's defaults."""
+
+VARIANT_LINE = {"": ":", "textbook": "-", "authors": "--"}
+"""EM variant of a run (``""``: none, ICP) -> line style."""
 
 
-def fig6(groundtruth, estimates, *, plane="xy", sequence=None, max_difference=MAX_TIME_DIFFERENCE):
-    """Top-down view of the ground truth and each method's aligned trajectory (paper Fig 6).
+def _run_style(run):
+    """(label, colour, line style) of a run named ``method`` or ``method-variant`` (``dgmm.odometry.odometry_runs``)."""
+    method = max((name for name in METHOD_STYLE if run.startswith(name)), key=len, default=run)
+    variant = run[len(method) + 1:]
+    label, color = METHOD_STYLE.get(method, (method, None))
+    return (f"{label}, {variant} EM" if variant else label), color, VARIANT_LINE.get(variant, "-.")
+
+
+def _panel(axes, groundtruth, estimates, plane, sequence, max_difference):
+    """One sequence's top-down view: the ground truth over the estimates' span and each aligned estimate."""
+    h, v = PLANES[plane]
+    span = [min(e.timestamps[0] for e in estimates.values()), max(e.timestamps[-1] for e in estimates.values())]
+    inside = (groundtruth.timestamps >= span[0] - max_difference) & (groundtruth.timestamps <= span[1] + max_difference)
+    truth = groundtruth.translations[inside]
+    axes.plot(truth[:, h], truth[:, v], color="black", lw=2.0, label="ground truth")
+    axes.plot(truth[0, h], truth[0, v], "o", color="black", ms=5)
+    for run, estimate in estimates.items():
+        error = absolute_trajectory_error(estimate, groundtruth, max_difference)
+        aligned = estimate.translations @ error.rotation.T + error.translation
+        label, color, style = _run_style(run)
+        axes.plot(aligned[:, h], aligned[:, v], color=color, ls=style, lw=1.4, label=f"{label} (ATE {error.rmse:.3g} m)")
+    axes.set_aspect("equal", adjustable="datalim")
+    axes.set_xlabel(f"{'xyz'[h]} (m)")
+    axes.set_ylabel(f"{'xyz'[v]} (m)")
+    axes.grid(True, alpha=0.3)
+    axes.legend(loc="best", fontsize=7)
+    n_frames = max(len(e) for e in estimates.values())
+    axes.set_title(f"{sequence}: top-down ({plane}), {n_frames} frames", fontsize=10)
+
+
+def fig6(panels, *, plane="xy", max_difference=MAX_TIME_DIFFERENCE):
+    """Top-down views of the ground truth and each run's aligned trajectory, one panel per sequence (paper Fig 6).
 
     Parameters
     ----------
-    groundtruth : dgmm.tum.Trajectory
-        The sequence's ground truth (e.g. ``read_trajectory(folder / "groundtruth.txt")``); only the part spanned
-        by the estimates' timestamps is drawn.
-    estimates : dict of str to dgmm.tum.Trajectory
-        Method name -> estimated trajectory, drawn in this order.
+    panels : dict of str to (dgmm.tum.Trajectory, dict of str to dgmm.tum.Trajectory)
+        Sequence name -> (its ground truth, run name -> estimated trajectory), drawn left to right in this order;
+        only the part of the ground truth spanned by the estimates' timestamps is drawn. Run names are
+        ``method`` or ``method-variant`` (colour by method, line style by EM variant).
     plane : {"xy", "xz", "yz"}, default="xy"
         World axes of the top-down view (z-up worlds: "xy").
-    sequence : str, optional
-        Sequence name, shown in the title.
     max_difference : float
         Timestamp association tolerance (s).
 
     Returns
     -------
     matplotlib.figure.Figure
-        One axes, metres, equal aspect; the legend gives each method's ATE RMSE.
+        One axes per sequence, metres, equal aspect; each legend gives the runs' ATE RMSE.
     """
     if plane not in PLANES:
         raise InputError(f"plane must be one of {sorted(PLANES)}, got {plane!r}")
-    if not estimates:
-        raise InputError("fig6 needs at least one estimated trajectory")
-    h, v = PLANES[plane]
-    figure = Figure(figsize=(5.5, 5.0), dpi=110, layout="constrained")
-    axes = figure.add_subplot()
-    span = [min(e.timestamps[0] for e in estimates.values()), max(e.timestamps[-1] for e in estimates.values())]
-    inside = (groundtruth.timestamps >= span[0] - max_difference) & (groundtruth.timestamps <= span[1] + max_difference)
-    truth = groundtruth.translations[inside]
-    axes.plot(truth[:, h], truth[:, v], color="black", lw=2.0, label="ground truth")
-    axes.plot(truth[0, h], truth[0, v], "o", color="black", ms=5)
-    for method, estimate in estimates.items():
-        error = absolute_trajectory_error(estimate, groundtruth, max_difference)
-        aligned = estimate.translations @ error.rotation.T + error.translation
-        label, color, style = METHOD_STYLE.get(method, (method, None, "-"))
-        axes.plot(aligned[:, h], aligned[:, v], color=color, ls=style, lw=1.4,
-                  label=f"{label} (ATE {error.rmse:.3g} m)")
-    axes.set_aspect("equal", adjustable="datalim")
-    axes.set_xlabel(f"{'xyz'[h]} (m)")
-    axes.set_ylabel(f"{'xyz'[v]} (m)")
-    axes.grid(True, alpha=0.3)
-    axes.legend(loc="best", fontsize=8)
-    n_frames = max(len(e) for e in estimates.values())
-    axes.set_title(f"{sequence or 'visual odometry'}: top-down ({plane}), {n_frames} frames", fontsize=10)
+    if not panels or not all(estimates for _, estimates in panels.values()):
+        raise InputError("fig6 needs at least one sequence, each with at least one estimated trajectory")
+    figure = Figure(figsize=(5.5 * len(panels), 5.0), dpi=110, layout="constrained")
+    for axes, (sequence, (groundtruth, estimates)) in zip(figure.subplots(1, len(panels), squeeze=False)[0],
+                                                           panels.items()):
+        _panel(axes, groundtruth, estimates, plane, sequence, max_difference)
     return figure
 
 
-def fig6_from_files(groundtruth_path, trajectory_paths, **options):
+def fig6_from_files(panels, **options):
     """:func:`fig6` of TUM trajectory files.
 
     Parameters
     ----------
-    groundtruth_path : path-like
-        The sequence's ``groundtruth.txt``.
-    trajectory_paths : dict of str to path-like
-        Method name -> its estimated trajectory file (``results/odometry/{sequence}/{method}/trajectory.txt``).
+    panels : dict of str to (path-like, dict of str to path-like)
+        Sequence name -> (its ``groundtruth.txt``, run name -> its estimated trajectory file
+        ``results/odometry/{sequence}/{run}/trajectory.txt``).
     **options
         Passed to :func:`fig6`.
     """
-    estimates = {method: read_trajectory(path) for method, path in trajectory_paths.items()}
-    return fig6(read_trajectory(groundtruth_path), estimates, **options)
+    return fig6({sequence: (read_trajectory(truth), {run: read_trajectory(path) for run, path in runs.items()})
+                 for sequence, (truth, runs) in panels.items()}, **options)
 
 
 def save_png(figure, path):

@@ -279,8 +279,9 @@ def synthetic_results(results):
             reg += reg_rows(model, "quadric1000", method, rng.lognormal(0, 1, 3), rng.lognormal(-2, 1, 3))
     write_csv(results / "tables" / "registration.csv", reg)
     write_csv(results / "tables" / "odometry.csv", [
-        {"sequence": "synthetic", "method": method, "ate_rmse_m": ate, "frames": 8}
-        for method, ate in (("gmm-pixels", 0.01), ("gmm-points", 0.02), ("icp", 0.03))])
+        odometry_row("synthetic", method, variant, ate)
+        for method, variant, ate in (("gmm-pixels", "textbook", 0.01), ("gmm-points", "textbook", 0.02),
+                                     ("icp", "", 0.03))])
     trajectories = Figure(figsize=(2, 2))
     trajectories.add_subplot().plot([0, 1], [0, 1])
     (results / "odometry").mkdir()
@@ -391,12 +392,28 @@ def test_every_figure_loads_and_the_verdicts_show_in_the_first_screen_of_headles
     assert len(bottoms) == len(claims.CLAIMS) and 0 < max(bottoms) <= height, (bottoms, height)
 
 
-def test_odometry_claim():
-    rows = [{"sequence": "synthetic", "method": method, "ate_rmse_m": str(ate), "frames": "8"}
-            for method, ate in (("gmm-pixels", 0.5), ("gmm-points", 0.4), ("icp", 0.9))]
+def odometry_row(sequence, method, variant, ate, missing=""):
+    """A row of odometry.csv as read back (strings)."""
+    return {"sequence": sequence, "method": method, "variant": variant, "frames": "8" if method else "",
+            "ate_rmse_m": str(ate), "rpe_translation_m_s": "0.1", "rpe_rotation_deg_s": "1.0",
+            "missing_folder": missing}
+
+
+def test_odometry_claim_per_sequence_and_variant():
+    rows = [odometry_row(sequence, method, variant, ate) for sequence, method, variant, ate in (
+        ("fr1", "gmm-pixels", "textbook", 0.5), ("fr1", "gmm-points", "textbook", 0.4),
+        ("fr1", "gmm-pixels", "authors", 0.3), ("fr1", "gmm-points", "authors", 0.4), ("fr1", "icp", "", 0.9),
+        ("synthetic", "gmm-pixels", "textbook", 0.2), ("synthetic", "icp", "", 0.1))]
+    rows.append(odometry_row("fr3", "", "", "", missing="../data/fr3"))
     claim = claims.odometry(claims.Measurements(odometry=rows))
-    assert "wins 1 of 2" in claim.evidence and claim.verdict == "partly"  # beats ICP, not the point GMM
+    # fr1 textbook: loses to points, beats ICP; fr1 authors: beats both; synthetic textbook: loses to ICP
+    assert "wins 3 of 5" in claim.evidence and claim.verdict == "partly"
+    assert "fr1 (8 frames), authors EM: gmm-pixels 0.300 m, gmm-points 0.400 m, icp 0.900 m" in claim.evidence
+    assert "Pending: fr3 (folder ../data/fr3 missing)" in claim.evidence
+    assert "icp 0.100 m ≤ gmm-pixels 0.200 m on synthetic (textbook EM)" in claim.why
     assert claims.odometry(claims.Measurements()).verdict == "pending"
+    only_missing = claims.odometry(claims.Measurements(odometry=rows[-1:]))
+    assert only_missing.verdict == "pending" and "../data/fr3" in only_missing.evidence
 
 
 @pytest.mark.slow

@@ -7,6 +7,8 @@ import os
 from snakemake.utils import validate
 
 from dgmm.data import REGISTRY
+from dgmm.odometry import odometry_runs
+from dgmm.pixels import sequence_intrinsics
 from dgmm.report import figure_names
 from dgmm.sweep import parse_input, variants_for
 from dgmm.trials import METHODS, mixture_source
@@ -142,20 +144,44 @@ def registration_mixture(wildcards):
 # Visual odometry
 
 
-def odometry_sequence():
-    """(name, folder) of the sequence to run: the configured TUM folder when it exists, else the synthetic one."""
-    folder = data_dir(ODO["sequence"])
-    if os.path.isdir(folder):
-        return os.path.basename(folder.rstrip(os.sep)), folder
-    return "synthetic", SYNTHETIC_SEQUENCE
+def odometry_sequences():
+    """The configured sequences: ``{name: folder}`` of those to run (real folders first, then the synthetic one),
+    and ``{name: configured path}`` of the real folders that are missing (the report says they are pending)."""
+    present, missing = {}, {}
+    for entry in ODO["sequences"]:
+        if entry != "synthetic":
+            folder = data_dir(entry)
+            name = os.path.basename(folder.rstrip(os.sep))
+            if os.path.isdir(folder):
+                present[name] = folder
+            else:
+                missing[name] = entry
+    if "synthetic" in ODO["sequences"]:
+        present["synthetic"] = SYNTHETIC_SEQUENCE
+    return present, missing
 
 
-ODO_SEQUENCE, ODO_FOLDER = odometry_sequence()
+ODO_SEQUENCES, ODO_MISSING = odometry_sequences()
+ODO_RUNS = odometry_runs(ODO["methods"], ODO["variants"])
 
 
 def odometry_outputs(name):
-    """File ``name`` of every configured method's job, in the configured order."""
-    return [f"{ODO_DIR}/{ODO_SEQUENCE}/{method}/{name}" for method in ODO["methods"]]
+    """File ``name`` of every (sequence, run) job, sequences in report order, runs in the configured order."""
+    return [f"{ODO_DIR}/{sequence}/{run}/{name}" for sequence in ODO_SEQUENCES for run in ODO_RUNS]
+
+
+def odometry_folder(wildcards):
+    """The sequence folder of an odometry job."""
+    return ODO_SEQUENCES[wildcards.sequence]
+
+
+def odometry_run_params(wildcards):
+    """Method, EM variant and intrinsics of an odometry job: the intrinsics from ``odometry.intrinsics`` or the
+    folder's name (the synthetic sequence is rendered with freiburg 3's)."""
+    method, variant = ODO_RUNS[wildcards.run]
+    name = wildcards.sequence
+    camera = ODO["intrinsics"].get(name) or ("fr3" if name == "synthetic" else sequence_intrinsics(name))
+    return {"method": method, "variant": variant or "textbook", "intrinsics": camera}
 
 
 # Report

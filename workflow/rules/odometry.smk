@@ -1,19 +1,17 @@
 # Visual odometry (paper §V "Visual Odometry", Fig 6): frame-to-frame odometry of the first odometry.frames depth
-# frames of a TUM RGB-D sequence with each method, one job per (sequence, method). The sequence is the configured
-# folder (odometry.sequence, e.g. an unpacked rgbd_dataset_freiburg3_long_office_household) when it exists, else the
-# synthetic one, rendered once from the seed into results/odometry/synthetic/sequence/. Under
-# results/odometry/{sequence}/{method}/ ({sequence}: the folder's name, or "synthetic"):
+# frames of every configured TUM RGB-D sequence that exists (odometry.sequences; missing ones are reported pending)
+# and of the synthetic one (rendered once from the seed into results/odometry/synthetic/sequence/), one job per
+# (sequence, run): a run is a GMM method with an EM variant (gmm-pixels-textbook, gmm-points-authors, ...) or icp.
+# Under results/odometry/{sequence}/{run}/ ({sequence}: the folder's name, or "synthetic"):
 #   trajectory.txt   the estimated trajectory, TUM format (camera -> first camera)
-#   ate.csv          ATE RMSE against the ground truth after a rigid alignment, and the frame count (deterministic)
-#   seconds.csv      each frame's model and registration time (kept apart so that ate.csv is byte-identical)
+#   ate.csv          ATE RMSE and the one-second RPE against the ground truth, and the frame count (deterministic)
+#   seconds.csv      each frame's model and registration time, and CPU time (kept apart: ate.csv is byte-identical)
 #   odometry.mcap    per-frame timings, the estimated and ground-truth trajectories (foxglove.PosesInFrame)
 #   odometry.rrd     the camera path and each frame's mixture (or ICP points) on the timeline `frame`
-# and results/tables/odometry.csv (ATE), odometry_seconds.csv (mean timings), results/odometry/fig6.png.
+# and results/tables/odometry.csv (ATE, RPE), odometry_seconds.csv (mean timings), results/odometry/fig6.png.
 import re
 
-from dgmm.odometry import METHODS as ODOMETRY_METHODS
-
-ODO_JOB = f"{ODO_DIR}/{{sequence}}/{{method}}"
+ODO_JOB = f"{ODO_DIR}/{{sequence}}/{{run}}"
 
 
 rule odometry_synthetic:
@@ -29,7 +27,7 @@ rule odometry_synthetic:
         runtime=60,
         cpus_per_task=1,
     params:
-        frames=ODO["frames"],
+        frames=ODO["synthetic"]["frames"],
         seed=config["seed"],
     script:
         "../scripts/odometry_synthetic.py"
@@ -37,7 +35,7 @@ rule odometry_synthetic:
 
 rule odometry_run:
     input:
-        sequence=ODO_FOLDER,
+        sequence=odometry_folder,
     output:
         trajectory=f"{ODO_JOB}/trajectory.txt",
         ate=f"{ODO_JOB}/ate.csv",
@@ -45,20 +43,22 @@ rule odometry_run:
         mcap=f"{ODO_JOB}/odometry.mcap",
         rrd=f"{ODO_JOB}/odometry.rrd",
     log:
-        f"{RESULTS}/logs/odometry/{{sequence}}/{{method}}.log",
+        f"{RESULTS}/logs/odometry/{{sequence}}/{{run}}.log",
     wildcard_constraints:
-        sequence=re.escape(ODO_SEQUENCE),
-        method="|".join(ODOMETRY_METHODS),
+        sequence="|".join(map(re.escape, ODO_SEQUENCES)),
+        run="|".join(map(re.escape, ODO_RUNS)),
     threads: 1
     resources:
         mem_mb=1500,
         runtime=240,
         cpus_per_task=1,
     params:
+        run=odometry_run_params,
         seed=config["seed"],
         frames=ODO["frames"],
         components=ODO["components"],
         max_iter=ODO["max_iter"],
+        warm_iter=ODO["warm_iter"],
         pixel_size=ODO["pixel_size"],
         icp_points=ODO["icp_points"],
     script:
@@ -75,13 +75,15 @@ rule odometry_table:
     log:
         f"{RESULTS}/logs/tables/odometry.log",
     threads: 1
+    params:
+        missing=ODO_MISSING,
     script:
         "../scripts/odometry_tables.py"
 
 
 rule odometry_figure:
     input:
-        sequence=ODO_FOLDER,
+        sequences=list(ODO_SEQUENCES.values()),
         trajectories=odometry_outputs("trajectory.txt"),
     output:
         png=report(f"{ODO_DIR}/fig6.png", caption="../report/odometry_fig6.rst", category="Figures"),
@@ -89,8 +91,8 @@ rule odometry_figure:
         f"{RESULTS}/logs/odometry/fig6.log",
     threads: 1
     params:
-        methods=ODO["methods"],
-        sequence=ODO_SEQUENCE,
+        sequences=list(ODO_SEQUENCES),
+        runs=list(ODO_RUNS),
         plane=ODO["plane"],
     script:
         "../scripts/odometry_figure.py"

@@ -1,12 +1,12 @@
-"""Job: frame-to-frame visual odometry of one (sequence, method); write the trajectory, its ATE, the timings and
-the recordings."""
+"""Job: frame-to-frame visual odometry of one (sequence, run); write the trajectory, its ATE and RPE, the timings
+and the recordings."""
 import sys
 
 from threadpoolctl import threadpool_limits
 
 from dgmm.odometry import first_frames, frame_seconds, run_odometry
-from dgmm.pixels import FR3
-from dgmm.trajectory_metrics import absolute_trajectory_error
+from dgmm.pixels import parse_intrinsics
+from dgmm.trajectory_metrics import drift_metrics
 from dgmm.tum import read_sequence, write_trajectory
 from dgmm.recording import OdometryRecorder
 from dgmm.sweep import job_seed
@@ -15,21 +15,25 @@ from dgmm.tables import write_csv
 smk = snakemake  # noqa: F821 (injected by Snakemake)
 sys.stderr = open(smk.log[0], "w")
 w, p, out = smk.wildcards, smk.params, smk.output
+method, variant, camera = p.run["method"], p.run["variant"], p.run["intrinsics"]
 sequence = read_sequence(smk.input.sequence)
 frames, groundtruth = first_frames(sequence, p.frames)
-seed = job_seed(p.seed, f"odometry/{w.sequence}/{w.method}", 0)
-params = dict(sequence=w.sequence, folder=str(smk.input.sequence), method=w.method, frames=len(frames),
-              n_components=p.components, max_iter=p.max_iter, size=p.pixel_size, n_icp_points=p.icp_points,
-              seed=seed, root_seed=p.seed)
+seed = job_seed(p.seed, f"odometry/{w.sequence}/{w.run}", 0)
+intrinsics = parse_intrinsics(camera)
+options = dict(intrinsics=intrinsics, n_components=p.components, max_iter=p.max_iter, warm_iter=p.warm_iter or None,
+               variant=variant, size=p.pixel_size, n_icp_points=p.icp_points, seed=seed)
+params = dict(sequence=w.sequence, folder=str(smk.input.sequence), method=method, variant=variant,
+              intrinsics=camera, frames=len(frames), n_components=p.components, max_iter=p.max_iter,
+              warm_iter=p.warm_iter, size=p.pixel_size, n_icp_points=p.icp_points, seed=seed, root_seed=p.seed)
 
 with threadpool_limits(smk.threads), OdometryRecorder(out.mcap, out.rrd, params=params, groundtruth=groundtruth,
-                                                      intrinsics=FR3) as recorder:
-    result = run_odometry(sequence, w.method, frames, n_components=p.components, max_iter=p.max_iter,
-                          size=p.pixel_size, n_icp_points=p.icp_points, seed=seed, callback=recorder)
+                                                      intrinsics=intrinsics) as recorder:
+    result = run_odometry(sequence, method, frames, callback=recorder, **options)
     recorder.finish(result.trajectory)
-error = absolute_trajectory_error(result.trajectory, sequence.groundtruth)
-write_trajectory(out.trajectory, result.trajectory, header=f"dgmm {w.method} odometry of {w.sequence}, seed {seed}")
-job = dict(sequence=w.sequence, method=w.method)
-write_csv(out.ate, [{**job, "ate_rmse_m": error.rmse, "frames": len(frames)}])
+metrics = drift_metrics(result.trajectory, sequence.groundtruth)
+write_trajectory(out.trajectory, result.trajectory, header=f"dgmm {w.run} odometry of {w.sequence}, seed {seed}")
+job = dict(sequence=w.sequence, method=method, variant=variant if method != "icp" else "")
+write_csv(out.ate, [{**job, "frames": len(frames), **{k: "" if v is None else v for k, v in metrics.items()}}])
 write_csv(out.seconds, [{**job, **row} for row in frame_seconds(result)])
-print(f"{w.sequence}/{w.method}: {len(frames)} frames, ATE RMSE {error.rmse:.4f} m", file=sys.stderr)
+print(f"{w.sequence}/{w.run}: {len(frames)} frames, {metrics}, {result.cpu_seconds.mean():.3f} CPU s per frame",
+      file=sys.stderr)

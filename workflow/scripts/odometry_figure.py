@@ -1,4 +1,4 @@
-"""Job: Fig 6, the top-down view of every method's trajectory against the ground truth."""
+"""Job: Fig 6, one top-down panel per sequence: every run's trajectory against the ground truth."""
 import sys
 from pathlib import Path
 
@@ -6,7 +6,7 @@ from dgmm.odometry_plot import fig6_from_files, save_png
 
 smk = snakemake  # noqa: F821 (injected by Snakemake)
 sys.stderr = open(smk.log[0], "w")
-trajectories = dict(zip(smk.params.methods, smk.input.trajectories))
-figure = fig6_from_files(Path(smk.input.sequence) / "groundtruth.txt", trajectories, plane=smk.params.plane,
-                         sequence=smk.params.sequence)
-save_png(figure, smk.output.png)
+runs, paths = smk.params.runs, iter(smk.input.trajectories)  # sequence-major, as odometry_outputs lists them
+panels = {name: (Path(folder) / "groundtruth.txt", {run: next(paths) for run in runs})
+          for name, folder in zip(smk.params.sequences, smk.input.sequences)}
+save_png(fig6_from_files(panels, plane=smk.params.plane), smk.output.png)
