@@ -90,9 +90,11 @@ def test_quadric_exact_on_open_mesh(bunny_res4):
 
 
 def test_quadric_keeps_planar_surface(cube):
+    """Vertices stay on the unit cube's faces to MeshLab's single precision: with planar quadrics on, collapsed
+    vertices are placed by a float32 quadric solve, a few float32 ulps (1.2e-7 each) off the face (3e-7 seen)."""
     vertices, faces = decimate_quadric(*cube, 100)
     assert faces.shape == (100, 3)
-    assert _on_cube(vertices).max() < 1e-9
+    assert _on_cube(vertices).max() < 10 * np.finfo(np.float32).eps
 
 
 @pytest.mark.parametrize("n_faces", [300, 1000])
