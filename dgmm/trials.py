@@ -29,7 +29,7 @@ from dgmm.errors import InputError
 from dgmm.mixture import GaussianMixture
 from dgmm.registration import (BUNNY_DIAGONAL, RigidTrial, random_trials, register_cpd, register_icp, register_p2d,
                                registration_errors)
-from dgmm.sweep import REPRESENTATIONS, job_seed
+from dgmm.sweep import REPRESENTATIONS, SIZED, job_seed
 
 COLUMNS = ("trial", "rotation_error_deg", "translation_error_pct", "iterations", "converged")
 """Columns of the rows :func:`run_trials` returns (all deterministic; wall times are returned apart)."""
@@ -85,6 +85,20 @@ def mixture_source(name):
     mixture, so that the two compare on it), every other method its own."""
     get_method(name)
     return name.removesuffix("-c2f")
+
+
+NO_VARIANT = "none"
+"""The EM variant recorded for methods without a mixture (ICP, CPD)."""
+
+
+def method_variants(name, variants):
+    """The EM variants method ``name`` runs under: each of ``variants`` for mixtures of sized primitives (mesh-*),
+    textbook only for point mixtures (where every variant is the same algorithm), :data:`NO_VARIANT` for methods
+    without a mixture."""
+    spec = get_method(name)
+    if not spec.needs_mixture:
+        return [NO_VARIANT]
+    return list(variants) if spec.representation in SIZED else ["textbook"]
 
 
 def get_method(name):

@@ -15,11 +15,12 @@ import trimesh
 from scipy.spatial.transform import Rotation
 
 from dgmm.tables import read_csv
+from dgmm.trials import METHODS, method_variants, mixture_source
 from tests.test_recording import read_blueprint, read_mcap, read_rrd, xyz
 from tests.workflow import RERUN, TEST_CONFIG, run_snakemake
 
 REG = TEST_CONFIG["registration"]
-COLUMNS = ["model", "mesh", "method", "trial", "rotation_error_deg", "translation_error_pct", "iterations",
+COLUMNS = ["model", "mesh", "protocol", "variant", "method", "trial", "rotation_error_deg", "translation_error_pct", "iterations",
            "converged"]
 pytestmark = pytest.mark.slow
 
@@ -39,17 +40,22 @@ def table(workdir):
 
 
 def expected_keys():
-    """(model, mesh, method, trial) of every configured trial."""
+    """(model, mesh, variant, method, trial) of every configured trial (the test config: scaled trials only)."""
     keys = set()
     for experiment in REG["experiments"].values():
         for model in experiment["models"]:
-            for method in experiment["methods"]:
-                keys |= {(model, experiment["mesh"], method, trial) for trial in range(experiment["trials"])}
+            for method, variant in method_settings(experiment["methods"]):
+                keys |= {(model, experiment["mesh"], variant, method, trial) for trial in range(experiment["trials"])}
     return keys
 
 
+def method_settings(methods):
+    """(method, EM variant) of every registration job of ``methods``."""
+    return [(method, variant) for method in methods for variant in method_variants(method, REG["variants"])]
+
+
 def chunk_folders(results):
-    return sorted(results.glob("registration/*/*/*/c*"))
+    return sorted(results.glob("registration/*/*/*/*/*/c*"))
 
 
 def pose(message):
@@ -90,15 +96,15 @@ def trials_of(folder):
 
 def test_table_has_every_trial_of_every_method(workdir, table):
     assert list(table[0]) == COLUMNS
-    keys = [(r["model"], r["mesh"], r["method"], int(r["trial"])) for r in table]
+    keys = [(r["model"], r["mesh"], r["variant"], r["method"], int(r["trial"])) for r in table]
     assert len(keys) == len(set(keys)) and set(keys) == expected_keys()
     seconds = read_csv(workdir / "results" / "tables" / "registration_seconds.csv")
-    assert [(r["model"], r["mesh"], r["method"], int(r["trial"])) for r in seconds] == keys
+    assert [(r["model"], r["mesh"], r["variant"], r["method"], int(r["trial"])) for r in seconds] == keys
     assert all(float(r["seconds"]) > 0 for r in seconds)
     n_chunks = -(-max(e["trials"] for e in REG["experiments"].values()) // REG["trials_per_chunk"])
     assert n_chunks >= 2  # the tiny config still splits trials into chunks
     assert len(chunk_folders(workdir / "results")) == sum(
-        len(e["methods"]) * -(-e["trials"] // REG["trials_per_chunk"]) for e in REG["experiments"].values())
+        len(method_settings(e["methods"])) * -(-e["trials"] // REG["trials_per_chunk"]) for e in REG["experiments"].values())
 
 
 def test_errors_are_in_the_papers_range(table):
@@ -118,12 +124,12 @@ def test_methods_see_identical_trials_within_the_protocol(workdir):
     diagonal = np.linalg.norm(vertices.max(axis=0) - vertices.min(axis=0))
     seen = defaultdict(dict)  # (model, mesh, trial) -> method -> (true pose, centre, source digest)
     for folder in chunk_folders(results):
-        model, mesh, method = folder.parts[-4:-1]
+        model, mesh, _, variant, method = folder.parts[-6:-1]
         trials, params = trials_of(folder)
         assert params["diagonal"] == pytest.approx(diagonal, rel=1e-12)
         for trial, true_pose, _ in trials:
             quaternion, position = pose(true_pose)
-            seen[model, mesh, trial["trial"]][method] = (tuple(quaternion), tuple(position), tuple(trial["centre"]),
+            seen[model, mesh, trial["trial"]][method, variant] = (tuple(quaternion), tuple(position), tuple(trial["centre"]),
                                                          trial["source_sha256"])
             # Authors' protocol: Euler angles within ±15° (static xyz axes), the centre moved by at most
             # 0.05 * diagonal / 0.24077 per axis.
@@ -132,7 +138,7 @@ def test_methods_see_identical_trials_within_the_protocol(workdir):
             centre = np.array(trial["centre"])
             shift = rotate(quaternion, centre) + position - centre
             assert np.all(np.abs(shift) <= 0.05 * diagonal / 0.24077 + 1e-12)
-    methods = {m for e in REG["experiments"].values() for m in e["methods"]}
+    methods = {setting for e in REG["experiments"].values() for setting in method_settings(e["methods"])}
     for key, by_method in seen.items():
         assert set(by_method) == methods, key
         assert len(set(by_method.values())) == 1, f"methods saw different trials at {key}"
@@ -140,15 +146,15 @@ def test_methods_see_identical_trials_within_the_protocol(workdir):
 
 
 def test_recorded_poses_reproduce_the_table(workdir, table):
-    rows = {(r["model"], r["mesh"], r["method"], int(r["trial"])): r for r in table}
+    rows = {(r["model"], r["mesh"], r["variant"], r["method"], int(r["trial"])): r for r in table}
     checked = 0
     for folder in chunk_folders(workdir / "results"):
-        model, mesh, method = folder.parts[-4:-1]
+        model, mesh, _, variant, method = folder.parts[-6:-1]
         trials, params = trials_of(folder)
         first, stop = params["trials"]
         assert [trial["trial"] for trial, _, _ in trials] == list(range(first, stop))
         for trial, true_pose, estimated_pose in trials:
-            row = rows[model, mesh, method, trial["trial"]]
+            row = rows[model, mesh, variant, method, trial["trial"]]
             (q_true, t_true), (q_est, t_est) = pose(true_pose), pose(estimated_pose)
             # Both are poses of the moved source in the model frame: the relative rotation's angle, and how far
             # apart they put the source centre.
@@ -169,14 +175,16 @@ def test_every_rrd_verifies_and_shows_the_first_trials_moving(workdir, table):
     results = workdir / "results"
     recordings = sorted(results.glob("registration/**/*.rrd"))
     gmms = sorted(results.glob("registration/**/gmm.npz"))
-    assert len(gmms) == 2 and len(recordings) == len(chunk_folders(results)) + len(gmms)
+    n_mixtures = len({(mixture_source(m), v) for e in REG["experiments"].values()
+                      for m, v in method_settings(e["methods"]) if METHODS[m].needs_mixture})
+    assert len(gmms) == n_mixtures and len(recordings) == len(chunk_folders(results)) + len(gmms)
     verify = subprocess.run([str(RERUN), "rrd", "verify", *map(str, recordings)], capture_output=True, text=True)
     assert verify.returncode == 0, verify.stderr
-    iterations = {(r["model"], r["mesh"], r["method"], int(r["trial"])): int(r["iterations"]) for r in table}
+    iterations = {(r["model"], r["mesh"], r["variant"], r["method"], int(r["trial"])): int(r["iterations"]) for r in table}
     for gmm in gmms:  # the P2D methods' fit
         assert read_blueprint(gmm.parent / "fit.rrd")[0] == "iteration"
     for folder in chunk_folders(results):
-        model, mesh, method = folder.parts[-4:-1]
+        model, mesh, _, variant, method = folder.parts[-6:-1]
         first = REG["trials_per_chunk"] * int(folder.name[1:])
         recorded = range(first, first + REG["recorded_trials"])
         timeline, views = read_blueprint(folder / "trials.rrd")
@@ -185,7 +193,7 @@ def test_every_rrd_verifies_and_shows_the_first_trials_moving(workdir, table):
         for trial in recorded:
             moving = read_rrd(folder / "trials.rrd", f"/trial-{trial}/source")
             # Iteration 0 is the trial's start, then one row per iteration of the method.
-            assert moving["iteration"] == list(range(iterations[model, mesh, method, trial] + 1))
+            assert moving["iteration"] == list(range(iterations[model, mesh, variant, method, trial] + 1))
         assert not read_rrd(folder / "trials.rrd", f"/trial-{first + REG['recorded_trials']}/source")
 
 
@@ -193,7 +201,7 @@ def test_rerun_chunk_gives_the_same_table_bytes(workdir, tmp_path):
     """Delete one chunk's outputs in a copy of the run; Snakemake redoes it and the table is byte-identical."""
     copy = tmp_path / "copy"
     shutil.copytree(workdir, copy)
-    chunk = copy / "results" / "registration" / "bunny" / "res4" / "points-random" / "c1"
+    chunk = copy / "results" / "registration" / "bunny" / "res4" / "scaled" / "textbook" / "points-random" / "c1"
     shutil.rmtree(chunk)
     table = Path("results") / "tables" / "registration.csv"
     (copy / table).unlink()

@@ -3,7 +3,8 @@
 - ``likelihood.csv``: model, input, K, init, variant, seed, eval_ll, bound, n_iter (one row per fitted seed);
 - ``fig2.csv``: measure, n, draw, bound, expected (Fig 2's likelihood expressions of one fit, and the triangles
   scored with a responsibility per point: :mod:`dgmm.shared_responsibility`);
-- ``registration.csv``: model, mesh, method, trial, rotation_error_deg, translation_error_pct, iterations, ...
+- ``registration.csv``: model, mesh, protocol, variant, method, trial, rotation_error_deg, translation_error_pct,
+  iterations, ...
 
 Registration methods are named ``{mesh|points}-{kmeans|random}`` (P2D with a GMM fitted to the mesh or to its
 vertices), ``icp`` and ``cpd``.
@@ -15,6 +16,8 @@ import numpy as np
 
 from dgmm.report import paper
 from dgmm.shared_responsibility import PER_POINT_MEASURE
+from dgmm.sweep import SIZED
+from dgmm.trials import NO_VARIANT
 
 FIG2_EXPRESSIONS = ("triangle", "centroid", "area x centroid")
 TABLE1_MESH = "quadric1000"  # the mesh of Table 1 (the data stage's quadric decimation), except for ...
@@ -88,19 +91,40 @@ def fig2_bars(rows, column):
     return bars, reference
 
 
-def registration_errors(rows):
-    """Errors of every registration trial.
+def registration_settings(rows):
+    """The (protocol, variant) settings of ``registration.csv``'s rows, scaled before literal, textbook EM first;
+    ICP and CPD rows (variant "none") belong to every setting of their protocol."""
+    protocols = sorted({row.get("protocol", "scaled") for row in rows}, key=lambda p: p != "scaled")
+    variants = sorted({row.get("variant", "textbook") for row in rows} - {NO_VARIANT} or {"textbook"},
+                      key=lambda v: v != "textbook")
+    return [(protocol, variant) for protocol in protocols for variant in variants]
+
+
+def registration_errors(rows, protocol="scaled", variant="textbook"):
+    """Errors of every registration trial run under a trial protocol with mixtures from an EM variant.
+
+    A method's rows are those of ``variant``, else (methods run under one variant only: ICP and CPD, point
+    mixtures) its only ones, "none" or textbook (``dgmm.trials.method_variants``). Rows without ``protocol`` or
+    ``variant`` columns count as scaled and textbook.
 
     Returns
     -------
     dict
         ``(model, mesh, method) -> {"rot": ndarray of shape (n_trials,), "trans": ndarray of shape (n_trials,)}``.
     """
-    groups = defaultdict(lambda: {name: [] for name in ERRORS})
+    groups = defaultdict(lambda: defaultdict(lambda: {name: [] for name in ERRORS}))
     for row in rows:
+        if row.get("protocol", "scaled") != protocol:
+            continue
+        errors = groups[row["model"], row["mesh"], row["method"]][row.get("variant", "textbook")]
         for name, column in ERRORS.items():
-            groups[row["model"], row["mesh"], row["method"]][name].append(float(row[column]))
-    return {key: {name: np.array(values) for name, values in errors.items()} for key, errors in groups.items()}
+            errors[name].append(float(row[column]))
+    chosen = {}
+    for key, by_variant in groups.items():
+        own = variant if variant in by_variant else next(iter(by_variant)) if len(by_variant) == 1 else None
+        if own == variant or own == NO_VARIANT or (own == "textbook" and key[2].startswith("points")):
+            chosen[key] = {name: np.array(values) for name, values in by_variant[own].items()}
+    return chosen
 
 
 def table1_mesh(model):
@@ -117,7 +141,7 @@ def _percent_of_reference(errors, model, method, name):
     return 100.0 * float(np.mean(measured[name])) / float(np.mean(reference[name]))
 
 
-def table1(means, errors=None):
+def table1(means, errors=None, variant="textbook", protocol="scaled"):
     """Table 1 for the paper's five models: ours beside the paper's, nan where we have no measurement.
 
     Parameters
@@ -125,26 +149,33 @@ def table1(means, errors=None):
     means : dict
         From :func:`likelihood_means`.
     errors : dict, optional
-        From :func:`registration_errors`; None while the registration stage is pending.
+        From :func:`registration_errors` (of ``protocol`` and ``variant``); None while the registration stage is
+        pending.
+    variant : str, default="textbook"
+        EM variant of the mesh fits (points fits are textbook EM whatever the variant).
+    protocol : str, default="scaled"
+        Trial protocol of the errors, recorded in the rows.
 
     Returns
     -------
     list of dict
-        One per model: ``model``, ``mesh`` (its Table 1 mesh, :func:`table1_mesh`), for each column of
+        One per model: ``model``, ``mesh`` (its Table 1 mesh, :func:`table1_mesh`), ``variant``, ``protocol``,
+        for each column of
         ``paper.TABLE1_COLUMNS`` ours and ``{column}_paper``, then ours of ``TABLE1_C2F_COLUMNS``.
         Likelihoods are mean eval log-likelihoods (nats); errors are % of ICP's mean error.
     """
-    fit = TABLE1_FIT
+    fit = {**TABLE1_FIT, "variant": variant}
     rows = []
     for model, published in paper.TABLE1.items():
         mesh = table1_mesh(model)
-        ours = {f"ll_{kind}": means.get((model, f"{mesh}-{representation}", fit["variant"], fit["init"], fit["K"]),
-                                        (math.nan,))[0]
+        ours = {f"ll_{kind}": means.get((model, f"{mesh}-{representation}",
+                                         fit["variant"] if representation in SIZED else "textbook", fit["init"],
+                                         fit["K"]), (math.nan,))[0]
                 for kind, representation in TABLE1_INPUTS.items()}
         for name in ERRORS:
             for kind in ("points", "mesh", "mesh_c2f"):
                 ours[f"{name}_{kind}"] = _percent_of_reference(errors or {}, model, TABLE1_METHODS[kind], name)
-        row = {"model": model, "mesh": mesh}
+        row = {"model": model, "mesh": mesh, "variant": variant, "protocol": protocol}
         for column, value in zip(paper.TABLE1_COLUMNS, published):
             row[column], row[f"{column}_paper"] = ours[column], value
         row.update({column: ours[column] for column in TABLE1_C2F_COLUMNS})
@@ -153,9 +184,9 @@ def table1(means, errors=None):
 
 
 def table1_columns():
-    """Column order of ``table1.csv``: model, mesh, each measure as ours and the paper's, then the coarse-to-fine
+    """Column order of ``table1.csv``: model, mesh, EM variant, trial protocol, each measure as ours and the paper's, then the coarse-to-fine
     P2D's errors (ours only)."""
-    return ["model", "mesh", *(name for column in paper.TABLE1_COLUMNS for name in (column, f"{column}_paper")),
+    return ["model", "mesh", "variant", "protocol", *(name for column in paper.TABLE1_COLUMNS for name in (column, f"{column}_paper")),
             *TABLE1_C2F_COLUMNS]
 
 

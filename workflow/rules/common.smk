@@ -11,7 +11,7 @@ from dgmm.odometry import odometry_runs
 from dgmm.pixels import sequence_intrinsics
 from dgmm.report import figure_names
 from dgmm.sweep import parse_input, variants_for
-from dgmm.trials import METHODS, mixture_source
+from dgmm.trials import METHODS, NO_VARIANT, PROTOCOLS, method_variants, mixture_source
 
 validate(config, schema="../schemas/config.schema.yaml")
 
@@ -95,14 +95,16 @@ def evaluation_set(wildcards):
 
 
 def registration_experiments():
-    """(model, mesh) -> (trials, methods) over every experiment; an experiment repeated on the same mesh takes
-    the most trials and every method (trials are the same for every experiment, see dgmm.trials)."""
+    """(model, mesh) -> (trials, methods, protocols) over every experiment; an experiment repeated on the same mesh
+    takes the most trials, every method and every protocol (trials are the same for every experiment, see
+    dgmm.trials)."""
     jobs = {}
     for experiment in REG["experiments"].values():
         for model in experiment["models"]:
-            trials, methods = jobs.get((model, experiment["mesh"]), (0, []))
+            trials, methods, protocols = jobs.get((model, experiment["mesh"]), (0, [], []))
             methods = methods + [m for m in experiment["methods"] if m not in methods]
-            jobs[model, experiment["mesh"]] = (max(trials, experiment["trials"]), methods)
+            protocols = protocols + [p for p in experiment.get("protocols", ["scaled"]) if p not in protocols]
+            jobs[model, experiment["mesh"]] = (max(trials, experiment["trials"]), methods, protocols)
     return jobs
 
 
@@ -117,12 +119,15 @@ def chunk_range(wildcards):
 
 
 def registration_outputs(name):
-    """Path of file ``name`` of every configured chunk, ordered by model, mesh, configured method, chunk."""
+    """Path of file ``name`` of every configured chunk, ordered by model, mesh, protocol, configured method,
+    variant (dgmm.trials.method_variants), chunk."""
     size = REG["trials_per_chunk"]
     return [
-        f"{RESULTS}/registration/{model}/{mesh}/{method}/c{chunk}/{name}"
-        for (model, mesh), (n_trials, methods) in sorted(REG_EXPERIMENTS.items())
+        f"{RESULTS}/registration/{model}/{mesh}/{protocol}/{variant}/{method}/c{chunk}/{name}"
+        for (model, mesh), (n_trials, methods, protocols) in sorted(REG_EXPERIMENTS.items())
+        for protocol in protocols
         for method in methods
+        for variant in method_variants(method, REG["variants"])
         for chunk in range(-(-n_trials // size))
     ]
 
@@ -138,7 +143,7 @@ def registration_mixture(wildcards):
     if not METHODS[wildcards.method].needs_mixture:
         return {}
     source = mixture_source(wildcards.method)
-    return {"gmm": f"{RESULTS}/registration/{wildcards.model}/{wildcards.mesh}/{source}/gmm.npz"}
+    return {"gmm": f"{RESULTS}/registration/{wildcards.model}/{wildcards.mesh}/{wildcards.variant}/{source}/gmm.npz"}
 
 
 # Visual odometry

@@ -1,29 +1,40 @@
 # Registration (paper §V "Mesh Registration": Fig 5, Table 1's error columns): for every configured (model, mesh),
 # random rigid trials registered by each method, every method on the same trials and source points. The source
 # points are drawn from the Poisson-disk evaluation set of the mesh the registered mesh comes from (res4's own,
-# else the full model's). Under results/registration/{model}/{mesh}/{method}/:
-#   gmm.npz, fit.mcap, fit.rrd   P2D methods: the mixture, fitted once and used by every chunk, and its fit logs
-#                                (*-c2f methods register to the mixture of the same method without the suffix)
+# else the full model's). Each experiment runs under its trial protocols (scaled, literal) and each mesh mixture
+# under every EM variant of registration.variants (dgmm.trials.method_variants; ICP and CPD under "none").
+# Under results/registration/{model}/{mesh}/:
+#   {variant}/{method}/gmm.npz, fit.mcap, fit.rrd   P2D methods: the mixture, fitted once and used by every chunk
+#                                and protocol, and its fit logs (*-c2f methods use their paper P2D's mixture)
+# and under results/registration/{model}/{mesh}/{protocol}/{variant}/{method}/:
 #   c{chunk}/errors.csv          one row per trial: errors, iterations, convergence (deterministic)
 #   c{chunk}/seconds.csv         each trial's wall time (kept apart so that errors stay byte-identical)
 #   c{chunk}/trials.mcap         every trial's true and estimated pose, errors, iterations and time (Foxglove)
 #   c{chunk}/trials.rrd          the chunk's first trials: source points moving iteration by iteration
 # and results/tables/registration.csv, registration_seconds.csv gather every chunk.
-REG_DIR = f"{RESULTS}/registration/{{model}}/{{mesh}}/{{method}}"
-REG_WILDCARDS = dict(model="|".join(REGISTRY), mesh="[a-z0-9]+", method="|".join(METHODS), chunk=r"\d+")
+GMM_DIR = f"{RESULTS}/registration/{{model}}/{{mesh}}/{{variant}}/{{method}}"
+REG_DIR = f"{RESULTS}/registration/{{model}}/{{mesh}}/{{protocol}}/{{variant}}/{{method}}"
+REG_WILDCARDS = dict(
+    model="|".join(REGISTRY),
+    mesh="[a-z0-9]+",
+    method="|".join(METHODS),
+    chunk=r"\d+",
+    protocol="|".join(PROTOCOLS),
+    variant=f"textbook|authors|{NO_VARIANT}",
+)
 C2F_SCALES = REG.get("c2f_scales", [0.5, 0.25, 0.125, 0.0625, 0.0])
-REG_MIXTURE = {key: REG[key] for key in ("components", "max_iter", "tol", "reg_covar", "variant")}
+REG_MIXTURE = {key: REG[key] for key in ("components", "max_iter", "tol", "reg_covar")}
 
 
 rule registration_gmm:
     input:
         mesh=f"{DATA_DIR}/{{model}}/{{mesh}}.ply",
     output:
-        gmm=f"{REG_DIR}/gmm.npz",
-        mcap=f"{REG_DIR}/fit.mcap",
-        rrd=f"{REG_DIR}/fit.rrd",
+        gmm=f"{GMM_DIR}/gmm.npz",
+        mcap=f"{GMM_DIR}/fit.mcap",
+        rrd=f"{GMM_DIR}/fit.rrd",
     log:
-        f"{RESULTS}/logs/registration/{{model}}/{{mesh}}/{{method}}/gmm.log",
+        f"{RESULTS}/logs/registration/{{model}}/{{mesh}}/{{variant}}/{{method}}/gmm.log",
     wildcard_constraints:
         **REG_WILDCARDS,
     threads: 1
@@ -45,7 +56,7 @@ rule registration_chunk:
         mcap=f"{REG_DIR}/c{{chunk}}/trials.mcap",
         rrd=f"{REG_DIR}/c{{chunk}}/trials.rrd",
     log:
-        f"{RESULTS}/logs/registration/{{model}}/{{mesh}}/{{method}}/c{{chunk}}.log",
+        f"{RESULTS}/logs/registration/{{model}}/{{mesh}}/{{protocol}}/{{variant}}/{{method}}/c{{chunk}}.log",
     wildcard_constraints:
         **REG_WILDCARDS,
     threads: 1
@@ -55,7 +66,6 @@ rule registration_chunk:
         recorded=REG["recorded_trials"],
         max_angle_deg=REG["max_angle_deg"],
         max_translation=REG["max_translation"],
-        protocol=REG.get("protocol", "scaled"),
         options={
             "p2d": {"gradient": REG["gradient"]},
             "p2d-c2f": {"gradient": REG["gradient"], "scales": C2F_SCALES},
