@@ -6,7 +6,7 @@ VENV := .venv
 STAMP := $(VENV)/.installed
 CORES ?= 2
 
-.PHONY: run test check bench clean
+.PHONY: run test check bench profile clean
 
 $(STAMP): pyproject.toml
 	test -x $(VENV)/bin/python || $(PYTHON) -m venv $(VENV)
@@ -27,6 +27,9 @@ check: $(STAMP)
 bench: $(STAMP)
 	$(VENV)/bin/python benchmarks/em_speed.py
 	$(VENV)/bin/python benchmarks/registration_speed.py
+
+profile: $(STAMP)  # cold sweep of a clone of HEAD in sweep units, per-rule job times (README "Sweep profile")
+	$(VENV)/bin/python benchmarks/sweep_profile.py --cores $(CORES)
 
 clean:
 	rm -rf results .snakemake

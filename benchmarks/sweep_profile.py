@@ -14,7 +14,8 @@ so that runs on machines of different speed compare. Steps:
    for the rules that time their own computation, the job's timing table (the seconds a fit's seeds, a chunk's
    trials or an odometry run's frames took): overhead = job wall time - computation.
 
-Usage: ``python benchmarks/sweep_profile.py [--cores 2] [--keep] [--markdown]`` (``make profile``).
+Usage: ``python benchmarks/sweep_profile.py [--cores 2] [--keep]`` (``make profile``); it prints the README's
+"Sweep profile" section, ready to paste.
 """
 import argparse
 import csv
@@ -48,31 +49,37 @@ def read_rows(path):
 
 
 def job_times(results):
-    """rule -> [(job wall seconds, computation seconds or None)] from the benchmark files under ``results``."""
+    """rule -> [(job wall seconds, job CPU seconds, computation seconds or None)] from the benchmark files under
+    ``results`` (Snakemake's ``s`` and ``cpu_time`` columns)."""
     jobs = defaultdict(list)
     root = results / "benchmarks"
     for path in sorted(root.rglob("*.tsv")):
-        rule, job = path.relative_to(root).parts[0], path.relative_to(root / path.relative_to(root).parts[0])
-        wall = float(read_rows(path)[0]["s"])
+        relative = path.relative_to(root)  # {rule}.tsv for a rule with one job, else {rule}/{wildcards}.tsv
+        rule = relative.stem if len(relative.parts) == 1 else relative.parts[0]
+        row = read_rows(path)[0]
         computation = None
-        if rule in COMPUTATION:
+        if rule in COMPUTATION and len(relative.parts) > 1:
             table, columns = COMPUTATION[rule]
-            rows = read_rows(results / table(job.with_suffix("").as_posix()))
-            computation = sum(float(row[c]) for row in rows for c in columns)
-        jobs[rule].append((wall, computation))
+            job = relative.relative_to(rule).with_suffix("").as_posix()
+            computation = sum(float(r[c]) for r in read_rows(results / table(job)) for c in columns)
+        jobs[rule].append((float(row["s"]), float(row["cpu_time"]), computation))
     return jobs
 
 
 def rule_table(jobs):
-    """Markdown table: per rule, jobs, mean wall, mean computation, median overhead (wall - computation)."""
-    lines = ["| rule | jobs | mean job wall (s) | sum of job walls (s) | mean computation (s) | median overhead (s) |",
-             "|---|---:|---:|---:|---:|---:|"]
-    for rule, times in sorted(jobs.items(), key=lambda item: -sum(w for w, _ in item[1])):
-        walls = [w for w, _ in times]
-        timed = [(w, c) for w, c in times if c is not None]
-        comp = f"{mean(c for _, c in timed):.2f}" if timed else "–"
-        over = f"{median(w - c for w, c in timed):.2f}" if timed else "–"
-        lines.append(f"| {rule} | {len(times)} | {mean(walls):.2f} | {sum(walls):.0f} | {comp} | {over} |")
+    """Markdown table per rule: jobs, mean and total job wall time, mean job CPU time, mean computation, and the
+    median overhead (job wall - computation, and job CPU - computation)."""
+    lines = ["| rule | jobs | mean job wall (s) | sum of job walls (s) | mean job CPU (s) | mean computation (s) "
+             "| median overhead, wall (s) | median overhead, CPU (s) |",
+             "|---|---:|---:|---:|---:|---:|---:|---:|"]
+    for rule, times in sorted(jobs.items(), key=lambda item: -sum(w for w, _, _ in item[1])):
+        walls, cpus = [w for w, _, _ in times], [c for _, c, _ in times]
+        timed = [(w, c, t) for w, c, t in times if t is not None]
+        comp = f"{mean(t for _, _, t in timed):.2f}" if timed else "–"
+        over = f"{median(w - t for w, _, t in timed):.2f}" if timed else "–"
+        over_cpu = f"{median(c - t for _, c, t in timed):.2f}" if timed else "–"
+        lines.append(f"| {rule} | {len(times)} | {mean(walls):.2f} | {sum(walls):.0f} | {mean(cpus):.2f} | {comp} "
+                     f"| {over} | {over_cpu} |")
     return "\n".join(lines)
 
 
@@ -87,15 +94,23 @@ def main():
         subprocess.run(["git", "clone", "--quiet", str(REPO), str(clone)], check=True)
         with threadpool_limits(1):
             yardstick = sklearn_fit_seconds()
+        commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=clone, capture_output=True, text=True,
+                                check=True).stdout.strip()
+        load_before = os.getloadavg()
         env = {**os.environ, "PYTHONPATH": str(clone)}
         snakemake = Path(sys.executable).with_name("snakemake")
         start = time.perf_counter()
         subprocess.run([str(snakemake), "--cores", str(args.cores)], cwd=clone, env=env, check=True)
         wall = time.perf_counter() - start
         load = os.getloadavg()
-        print(f"cold sweep {wall:.0f} s on {args.cores} cores; yardstick (scikit-learn, 50k points, K=100, "
-              f"25 iterations, 1 thread) {yardstick:.2f} s; **{wall / yardstick:.1f} sweep units**; "
-              f"load average after the run {load[0]:.2f} / {load[1]:.2f} / {load[2]:.2f}\n")
+        print("### Sweep profile\n")
+        print(f"`make profile` at commit {commit}: cold sweep {wall:.0f} s on {args.cores} cores; yardstick "
+              f"(scikit-learn, 50k points, K=100, 25 iterations, 1 thread) {yardstick:.2f} s; "
+              f"**{wall / yardstick:.1f} sweep units** (goal ≤ 25); load average before "
+              f"{' / '.join(f'{x:.2f}' for x in load_before)}, after {' / '.join(f'{x:.2f}' for x in load)}. "
+              "Per rule, from each job's Snakemake `benchmark:` file (results/benchmarks/) and, for `fit` and "
+              "`registration_chunk`, the job's own timing table (its seeds' or trials' seconds): overhead is the "
+              "rest of the job (Python start, imports, loading, scoring, recordings; goal ≤ 1 s median).\n")
         print(rule_table(job_times(clone / "results")))
     finally:
         if args.keep:

@@ -11,7 +11,7 @@ import pytest
 from dgmm.shared_responsibility import PER_POINT_MEASURE
 from dgmm.tables import read_csv
 from tests.test_recording import read_blueprint, read_mcap, read_rrd
-from tests.workflow import RERUN, run_snakemake, snakemake_command
+from tests.workflow import RERUN, TABLE_SHA256, run_snakemake, sha256, snakemake_command
 
 pytestmark = pytest.mark.slow
 
@@ -48,6 +48,10 @@ def test_likelihoods_reproduce_the_paper_on_bunny_res4(sweep):
     # Points have a single EM variant; sized inputs run both.
     assert {v for (i, *_, v) in ll if i == "res4-vertices"} == {"textbook"}
     assert {v for (i, *_, v) in ll if i == "res4-exact"} == {"textbook", "authors"}
+
+
+def test_likelihood_table_bytes_are_the_recorded_ones(sweep):
+    assert sha256(sweep / "tables" / "likelihood.csv") == TABLE_SHA256["likelihood.csv"]
 
 
 def test_every_recording_reads_back_and_matches_the_table(sweep):

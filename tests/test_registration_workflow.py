@@ -17,7 +17,7 @@ from scipy.spatial.transform import Rotation
 from dgmm.tables import read_csv
 from dgmm.trials import METHODS, method_variants, mixture_source
 from tests.test_recording import read_blueprint, read_mcap, read_rrd, xyz
-from tests.workflow import RERUN, TEST_CONFIG, run_snakemake
+from tests.workflow import RERUN, TABLE_SHA256, TEST_CONFIG, run_snakemake, sha256
 
 REG = TEST_CONFIG["registration"]
 COLUMNS = ["model", "mesh", "protocol", "variant", "method", "trial", "rotation_error_deg", "translation_error_pct", "iterations",
@@ -105,6 +105,11 @@ def test_table_has_every_trial_of_every_method(workdir, table):
     assert n_chunks >= 2  # the tiny config still splits trials into chunks
     assert len(chunk_folders(workdir / "results")) == sum(
         len(method_settings(e["methods"])) * -(-e["trials"] // REG["trials_per_chunk"]) for e in REG["experiments"].values())
+
+
+def test_table_bytes_are_the_recorded_ones(workdir):
+    path = workdir / "results" / "tables" / "registration.csv"
+    assert sha256(path) == TABLE_SHA256["registration.csv"]
 
 
 def test_errors_are_in_the_papers_range(table):

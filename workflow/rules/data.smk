@@ -23,6 +23,8 @@ rule data_mesh:
         mesh=f"{DATA_DIR}/{{model}}/{{mesh}}.ply",
     log:
         f"{RESULTS}/logs/data/{{model}}/{{mesh}}.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/data_mesh/{{model}}/{{mesh}}.tsv"
     wildcard_constraints:
         **DATA_WILDCARDS,
     threads: 1
@@ -45,6 +47,8 @@ rule data_eval:
         points=f"{DATA_DIR}/{{model}}/{{mesh}}_eval.ply",
     log:
         f"{RESULTS}/logs/data/{{model}}/{{mesh}}_eval.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/data_eval/{{model}}/{{mesh}}.tsv"
     wildcard_constraints:
         **DATA_WILDCARDS,
     threads: 1
@@ -66,6 +70,8 @@ rule data_reduce:
         reduced=f"{DATA_DIR}/{{model}}/{{method}}{{budget}}.ply",
     log:
         f"{RESULTS}/logs/data/{{model}}/{{method}}{{budget}}.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/data_reduce/{{model}}/{{method}}{{budget}}.tsv"
     wildcard_constraints:
         **DATA_WILDCARDS,
     threads: 1

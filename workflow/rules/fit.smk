@@ -25,6 +25,8 @@ rule fit:
         rrd=f"{FIT_DIR}/fit.rrd",
     log:
         f"{RESULTS}/logs/fits/{{model}}/{{input}}/{{variant}}/k{{k}}-{{init}}.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/fit/{{model}}/{{input}}/{{variant}}/k{{k}}-{{init}}.tsv"
     threads: 1
     resources:
         mem_mb=1000,

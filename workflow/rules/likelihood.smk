@@ -14,6 +14,8 @@ rule likelihood_table:
         seconds=f"{RESULTS}/tables/fit_seconds.csv",
     log:
         f"{RESULTS}/logs/tables/likelihood.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/likelihood_table.tsv"
     threads: 1
     resources:
         mem_mb=500,
@@ -32,6 +34,8 @@ rule fig2:
         rrd=f"{RESULTS}/fig2/fit.rrd",
     log:
         f"{RESULTS}/logs/fig2.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/fig2.tsv"
     threads: 1
     resources:
         mem_mb=1000,

@@ -21,6 +21,8 @@ rule odometry_synthetic:
         sequence=directory(SYNTHETIC_SEQUENCE),
     log:
         f"{RESULTS}/logs/odometry/synthetic.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/odometry_synthetic.tsv"
     threads: 1
     resources:
         mem_mb=1000,
@@ -44,6 +46,8 @@ rule odometry_run:
         rrd=f"{ODO_JOB}/odometry.rrd",
     log:
         f"{RESULTS}/logs/odometry/{{sequence}}/{{run}}.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/odometry_run/{{sequence}}/{{run}}.tsv"
     wildcard_constraints:
         sequence="|".join(map(re.escape, ODO_SEQUENCES)),
         run="|".join(map(re.escape, ODO_RUNS)),
@@ -74,6 +78,8 @@ rule odometry_table:
         seconds=f"{RESULTS}/tables/odometry_seconds.csv",
     log:
         f"{RESULTS}/logs/tables/odometry.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/odometry_table.tsv"
     threads: 1
     params:
         missing=ODO_MISSING,
@@ -89,6 +95,8 @@ rule odometry_figure:
         png=report(f"{ODO_DIR}/fig6.png", caption="../report/odometry_fig6.rst", category="Figures"),
     log:
         f"{RESULTS}/logs/odometry/fig6.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/odometry_figure.tsv"
     threads: 1
     params:
         sequences=list(ODO_SEQUENCES),

@@ -35,6 +35,8 @@ rule registration_gmm:
         rrd=f"{GMM_DIR}/fit.rrd",
     log:
         f"{RESULTS}/logs/registration/{{model}}/{{mesh}}/{{variant}}/{{method}}/gmm.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/registration_gmm/{{model}}/{{mesh}}/{{variant}}/{{method}}.tsv"
     wildcard_constraints:
         **REG_WILDCARDS,
     threads: 1
@@ -57,6 +59,8 @@ rule registration_chunk:
         rrd=f"{REG_DIR}/c{{chunk}}/trials.rrd",
     log:
         f"{RESULTS}/logs/registration/{{model}}/{{mesh}}/{{protocol}}/{{variant}}/{{method}}/c{{chunk}}.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/registration_chunk/{{model}}/{{mesh}}/{{protocol}}/{{variant}}/{{method}}/c{{chunk}}.tsv"
     wildcard_constraints:
         **REG_WILDCARDS,
     threads: 1
@@ -85,6 +89,8 @@ rule registration_table:
         seconds=f"{RESULTS}/tables/registration_seconds.csv",
     log:
         f"{RESULTS}/logs/tables/registration.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/registration_table.tsv"
     threads: 1
     script:
         "../scripts/concat_tables.py"

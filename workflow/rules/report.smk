@@ -16,6 +16,8 @@ rule report:
         ],
     log:
         f"{RESULTS}/logs/report.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/report.tsv"
     threads: 1
     resources:
         mem_mb=1000,  # measured: 380 MB peak, 12 s on the full bunny
