@@ -171,6 +171,12 @@ def test_p2d_gradient_matches_central_differences(seed):
     np.testing.assert_allclose(gradient, numeric, rtol=0, atol=1e-7 * np.linalg.norm(numeric))
 
 
+def _tables(fixed, moving):
+    """The D2D tables of two mixtures, rotating about the moving one's centroid."""
+    fixed, moving = FittedMixture.from_fitted("f", fixed), FittedMixture.from_fitted("m", moving)
+    return d2d.PairTables.of(fixed, moving, moving.centroid)
+
+
 def test_d2d_cost_matches_a_per_pair_loop():
     rng = np.random.default_rng(30)
     fixed, moving = _random_mixture(rng, 4), _random_mixture(rng, 3)
@@ -183,8 +189,7 @@ def test_d2d_cost_matches_a_per_pair_loop():
             y = fixed.means_[i] - translation - rotation @ moving.means_[j]
             s = fixed.covariances_[i] + rotation @ moving.covariances_[j] @ rotation.T
             expected -= fixed.weights_[i] * moving.weights_[j] * np.exp(-0.5 * y @ np.linalg.inv(s) @ y)
-    cost = d2d.d2d_cost(params, FittedMixture.from_fitted("f", fixed), FittedMixture.from_fitted("m", moving),
-                         centre, False)
+    cost = d2d.d2d_cost(params, _tables(fixed, moving), False)
     assert cost == pytest.approx(expected, rel=1e-12)
 
 
@@ -194,8 +199,9 @@ def test_d2d_gradient_matches_central_differences(seed):
     fixed = FittedMixture.from_fitted("f", _random_mixture(rng, 6))
     moving = FittedMixture.from_fitted("m", _random_mixture(rng, 5))
     params = _random_params(rng)
-    _, gradient = d2d.d2d_cost(params, fixed, moving, moving.centroid, True)
-    numeric = _central_differences(lambda x: d2d.d2d_cost(x, fixed, moving, moving.centroid, False), params, 1e-6)
+    tables = _tables(fixed, moving)
+    _, gradient = d2d.d2d_cost(params, tables, True)
+    numeric = _central_differences(lambda x: d2d.d2d_cost(x, tables, False), params, 1e-6)
     np.testing.assert_allclose(gradient, numeric, rtol=0, atol=1e-7 * np.linalg.norm(numeric))
 
 
@@ -214,7 +220,7 @@ def _pose_cost_cases(seed):
     points = 2 * rng.normal(size=(40, 3))
     rotation, translation = Rotation.random(rng=rng).as_matrix(), 0.5 * rng.normal(size=3)
     return [("p2d", p2d.p2d_pose_cost(points, points.mean(axis=0), fixed), rotation, translation),
-            ("d2d", d2d.d2d_pose_cost(fixed, moving, moving.centroid), rotation, translation)]
+            ("d2d", d2d.d2d_pose_cost(_tables(fixed, moving)), rotation, translation)]
 
 
 @pytest.mark.parametrize("seed", range(3))
@@ -228,17 +234,20 @@ def test_pose_gradients_match_central_differences(seed):
 
 
 @pytest.mark.parametrize("seed", range(3))
-def test_p2d_hessian_matches_central_differences_of_the_cost(seed):
-    """The exact P2D Hessian against second central differences of the cost along random directions (Richardson
-    extrapolated from steps h and h/2, so the truncation error is O(h⁴))."""
-    _, evaluate, rotation, translation = _pose_cost_cases(seed)[0]
+@pytest.mark.parametrize("case", [0, 1], ids=["p2d", "d2d"])
+def test_exact_hessians_match_central_differences_of_the_cost(seed, case):
+    """The exact P2D and D2D Hessians against second central differences of the cost along 24 random directions
+    (more than the 21 entries of a symmetric 6x6; Richardson extrapolated from steps h and h/2, so the truncation
+    error is O(h⁴))."""
+    _, evaluate, rotation, translation = _pose_cost_cases(seed)[case]
     cost, _ = _perturbed(evaluate, rotation, translation)
     hessian = evaluate(rotation, translation)[1]()[2]
+    np.testing.assert_allclose(hessian, hessian.T, rtol=0, atol=1e-12 * np.abs(hessian).max())
 
     def second(direction, h):
         return (cost(h * direction) - 2 * cost(np.zeros(6)) + cost(-h * direction)) / h**2
 
-    for direction in np.random.default_rng(seed).normal(size=(6, 6)):
+    for direction in np.random.default_rng(seed).normal(size=(24, 6)):
         numeric = (4 * second(direction, 5e-5) - second(direction, 1e-4)) / 3
         assert direction @ hessian @ direction == pytest.approx(numeric, rel=1e-5, abs=1e-6 * np.abs(hessian).max())
 

@@ -1,75 +1,205 @@
 """Distribution-to-distribution (D2D) registration of two mixtures, the determinant-free cost (paper §V, VO).
 
 ``f = -Σᵢⱼ πᵢ πⱼ exp(-½ yᵢⱼᵀ Sᵢⱼ⁻¹ yᵢⱼ)`` with ``Sᵢⱼ = Σᵢ + R Σⱼ Rᵀ`` and ``yᵢⱼ = μᵢ - (R (μⱼ - c) + c + t')``:
-component ``i`` of the fixed mixture, ``j`` of the moving one. Every pair is computed at once: the symmetric
-``Sᵢⱼ`` as its 6 distinct entries, each an ``(n_fixed, n_moving)`` array, inverted by its adjugate.
+component ``i`` of the fixed mixture, ``j`` of the moving one. The cost is one pass over every pair at once (the
+symmetric ``Sᵢⱼ`` as its 6 distinct entries, each an ``(n_fixed, n_moving)`` array, inverted by its adjugate).
+The derivatives are a second pass over only the pairs whose term is within ``e^-50`` of the largest (mixtures of a
+surface overlap little: a fifth of the pairs or fewer), each pair a row of ``(n_pairs, ...)`` arrays.
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
 from functools import partial
 
 import numpy as np
 
-from dgmm.registration.fitted import EXP_FLOOR, FULL_INDEX as _FULL, FittedMixture
+from dgmm.registration.fitted import EXP_FLOOR, FULL_INDEX as _FULL, FittedMixture, quadratic_features
 from dgmm.registration.pose import params_from_pose
 from dgmm.registration.rotations import LEVI_CIVITA, rotation_and_jacobian
 from dgmm.registration.solvers import (TRANSLATION_UNIT, check_solver, minimise_bfgs, minimise_gauss_newton,
-                                       pose_derivatives, rotation_curvature)
+                                       pose_matrices)
 
 _ROWS, _COLS = np.array([0, 1, 2, 0, 0, 1]), np.array([0, 1, 2, 1, 2, 2])  # the 6 distinct entries of a symmetric 3x3
+NEGLIGIBLE = 50.0
+"""Pairs whose term is below ``e^-50`` (2e-22) times the largest are left out of the derivatives: fewer than 1e6
+pairs of them change the cost and its derivatives by less than rounding (tested against all pairs)."""
+_SKEW = -np.transpose(LEVI_CIVITA, (2, 0, 1)).reshape(3, 9)
+"""``a @ _SKEW`` is the cross-product matrix ``[a]x`` (``[a]x b = a x b``) of each row of ``a``, flattened to 9."""
 
 
-def _pairs(rotation, translation, fixed, moving, centre):
-    """Every pair's terms of the D2D cost at the pose ``(R, t')``.
+@dataclass(frozen=True)
+class PairTables:
+    """What the D2D cost needs of two mixtures and the centre of rotation, computed once per registration.
 
-    Returns
-    -------
-    cost : float
-    rotated : ndarray of shape (n_moving, 3)
-        ``R (μⱼ - c)``.
-    rotated_covariances : ndarray of shape (n_moving, 3, 3)
-        ``R Σⱼ Rᵀ``.
-    terms : ndarray of shape (n_fixed, n_moving)
-        ``πᵢ πⱼ exp(-½ yᵀ S⁻¹ y)``.
-    v : ndarray of shape (3, n_fixed, n_moving)
-        ``Sᵢⱼ⁻¹ yᵢⱼ``.
-    inverse : ndarray of shape (6, n_fixed, n_moving)
-        The distinct entries of ``Sᵢⱼ⁻¹``.
+    Attributes
+    ----------
+    fixed : FittedMixture
+    fixed_means : ndarray of shape (3, n_fixed)
+        Transposed, for gathering the pairs' columns.
+    fixed_covariances : ndarray of shape (6, n_fixed)
+        The 6 distinct entries of each ``Σᵢ``.
+    offsets : ndarray of shape (n_moving, 3)
+        ``μⱼ - c``.
+    moving_covariances : ndarray of shape (n_moving, 3, 3)
+    log_moving_weights : ndarray of shape (n_moving,)
+    log_weights : ndarray of shape (n_fixed, n_moving)
+        ``log πᵢ + log πⱼ``.
+    inverse_widths : ndarray of shape (n_fixed, n_moving)
+        ``1 / (λmax(Σᵢ) + λmax(Σⱼ))``.
+    normals : ndarray of shape (n_fixed, 3)
+        Eigenvector ``nᵢ`` of the smallest eigenvalue of each ``Σᵢ``.
+    normal_outer : ndarray of shape (n_fixed, 6)
+        The 6 distinct entries of ``nᵢ nᵢᵀ``, the off-diagonal ones doubled: ``normal_outer @ C6`` is ``nᵀ C n``.
+    thickness : ndarray of shape (n_fixed,)
+        That smallest eigenvalue.
+    centre : ndarray of shape (3,)
     """
-    rotated = (moving.means - centre) @ rotation.T
-    y = fixed.means.T[:, :, None] - (rotated + centre + translation).T[:, None, :]
-    rotated_covariances = rotation @ moving.covariances @ rotation.T
-    a, b, c, d, e, f = (fixed.covariances[:, _ROWS, _COLS].T[:, :, None]
-                        + rotated_covariances[:, _ROWS, _COLS].T[:, None, :])
-    inverse = np.array([b * c - f * f, a * c - e * e, a * b - d * d, e * f - d * c, d * f - b * e, d * e - a * f])
-    inverse /= a * inverse[0] + d * inverse[3] + e * inverse[4]
-    (yx, yy, yz), (ixx, iyy, izz, ixy, ixz, iyz) = y, inverse
-    v = np.array([ixx * yx + ixy * yy + ixz * yz, ixy * yx + iyy * yy + iyz * yz, ixz * yx + iyz * yy + izz * yz])
-    exponent = yx * v[0]
-    exponent += yy * v[1]
-    exponent += yz * v[2]
-    exponent *= -0.5
-    terms = np.exp(np.maximum(exponent, EXP_FLOOR, out=exponent), out=exponent)
-    terms *= fixed.weights[:, None]
-    terms *= moving.weights[None, :]
-    return -float(terms.sum()), rotated, rotated_covariances, terms, v, inverse
+
+    fixed: FittedMixture
+    fixed_means: np.ndarray
+    fixed_covariances: np.ndarray
+    offsets: np.ndarray
+    moving_covariances: np.ndarray
+    log_moving_weights: np.ndarray
+    log_weights: np.ndarray
+    inverse_widths: np.ndarray
+    normals: np.ndarray
+    normal_outer: np.ndarray
+    thickness: np.ndarray
+    centre: np.ndarray
+
+    @classmethod
+    def of(cls, fixed, moving, centre):
+        """The tables of two :class:`FittedMixture` and the centre of rotation ``c`` (3,)."""
+        fixed_values, fixed_vectors = np.linalg.eigh(fixed.covariances)
+        moving_widths = np.linalg.eigvalsh(moving.covariances)[:, 2]
+        normals = fixed_vectors[:, :, 0]
+        log_moving = np.log(moving.weights)
+        return cls(fixed, fixed.means.T.copy(), fixed.covariances[:, _ROWS, _COLS].T.copy(), moving.means - centre, moving.covariances, log_moving,
+                   np.log(fixed.weights)[:, None] + log_moving[None, :],
+                   1.0 / (fixed_values[:, 2:] + moving_widths[None, :]), normals,
+                   normals[:, _ROWS] * normals[:, _COLS] * np.where(_ROWS == _COLS, 1.0, 2.0), fixed_values[:, 0],
+                   centre)
+
+    def candidates(self, moved, rotated_covariances):
+        """Indices ``(i, j)`` of the pairs whose term may be within ``e^-NEGLIGIBLE`` of the largest.
+
+        Rigorous bounds, no exponent computed: ``S ≥ Σᵢ`` gives ``yᵀ S⁻¹ y ≤ yᵀ Σᵢ⁻¹ y`` (a lower bound of the largest
+        term, every pair's at once from one product of P2D's :func:`quadratic_features` table); an upper bound of
+        each term comes from ``yᵀ S⁻¹ y ≥ (uᵀ y)² / (uᵀ S u)`` for unit ``u``: ``|y|² / (λmax(Σᵢ) + λmax(Σⱼ))``
+        along ``y`` and ``(nᵢᵀ y)² / (λmin(Σᵢ) + nᵢᵀ C nᵢ)`` along the normal of a flat ``Σᵢ``.
+        """
+        fixed = self.fixed
+        floor = (quadratic_features(moved - fixed.origin) @ fixed.log_density_table
+                 - fixed.log_normalisers + np.log(fixed.weights) + self.log_moving_weights[:, None]).max()
+        squared = np.sum(fixed.means ** 2, axis=1)[:, None] + np.sum(moved ** 2, axis=1)[None, :]
+        squared -= 2.0 * fixed.means @ moved.T
+        squared *= self.inverse_widths
+        along = np.sum(self.normals * fixed.means, axis=1)[:, None] - self.normals @ moved.T
+        along *= along
+        along /= self.thickness[:, None] + self.normal_outer @ rotated_covariances[:, _ROWS, _COLS].T
+        bound = np.maximum(squared, along, out=squared)
+        bound *= -0.5
+        bound += self.log_weights
+        return np.divmod(np.flatnonzero(bound >= floor - NEGLIGIBLE), bound.shape[1])
 
 
-def _moving_derivatives(terms, v):
-    """``d f / d(moved μⱼ) = -Σᵢ terms vᵢⱼ`` (n_moving, 3) and ``Oⱼ = Σᵢ terms vᵢⱼ vᵢⱼᵀ`` (n_moving, 3, 3)."""
-    weighted = terms[None] * v
-    return -weighted.sum(axis=1).T, np.einsum("aij,bij->jab", weighted, v)
+@dataclass(frozen=True)
+class _Pairs:
+    """The candidate pairs at one pose: their indices, ``log_terms`` ``log πᵢ πⱼ - ½ yᵀ S⁻¹ y``, the adjugates
+    (6, n_pairs) and determinants of ``S``, ``adj(S) y`` (3, n_pairs); ``R (μⱼ - c)`` and ``R Σⱼ Rᵀ`` per moving
+    component."""
+
+    cost: float
+    moving_index: np.ndarray
+    log_terms: np.ndarray
+    adjugates: np.ndarray
+    determinants: np.ndarray
+    adjugate_y: np.ndarray
+    rotated: np.ndarray
+    rotated_covariances: np.ndarray
 
 
-def d2d_cost(params, fixed, moving, centre, with_grad):
+def _pairs(rotation, translation, tables):
+    """The D2D cost at the pose ``(R, t')`` with the terms of the pairs that are not negligible."""
+    rotated = tables.offsets @ rotation.T
+    moved = rotated + tables.centre + translation
+    rotated_covariances = rotation @ tables.moving_covariances @ rotation.T
+    fixed_index, moving_index = tables.candidates(moved, rotated_covariances)
+    y = np.take(tables.fixed_means, fixed_index, axis=1) - np.take(moved.T, moving_index, axis=1)
+    a, b, c, d, e, f = (np.take(tables.fixed_covariances, fixed_index, axis=1)
+                        + np.take(rotated_covariances[:, _ROWS, _COLS].T, moving_index, axis=1))
+    adjugates = np.array([b * c - f * f, a * c - e * e, a * b - d * d, e * f - d * c, d * f - b * e, d * e - a * f])
+    determinants = a * adjugates[0] + d * adjugates[3] + e * adjugates[4]
+    (yx, yy, yz), (axx, ayy, azz, axy, axz, ayz) = y, adjugates
+    adjugate_y = np.array([axx * yx + axy * yy + axz * yz, axy * yx + ayy * yy + ayz * yz,
+                           axz * yx + ayz * yy + azz * yz])
+    log_terms = yx * adjugate_y[0]
+    log_terms += yy * adjugate_y[1]
+    log_terms += yz * adjugate_y[2]
+    log_terms /= determinants
+    log_terms *= -0.5
+    log_terms += np.take(tables.log_weights, fixed_index * len(moved) + moving_index)
+    np.maximum(log_terms, EXP_FLOOR, out=log_terms)
+    cost = -float(np.exp(log_terms).sum())
+    return _Pairs(cost, moving_index, log_terms, adjugates, determinants, adjugate_y, rotated, rotated_covariances)
+
+
+def _derivatives(pairs, hessians):
+    """Gradient of the D2D cost over ``(δ, ω)`` (translation ``t' + δ``, left rotation ``exp([ω]x) R``), and with
+    ``hessians`` its Gauss-Newton matrix and exact Hessian (6, 6), from the pairs that are not negligible.
+
+    Per pair, with ``v = S⁻¹ y``, ``p = R (μⱼ - c)``, ``C = R Σⱼ Rᵀ`` and the exponent ``E = -½ yᵀ S⁻¹ y``:
+    ``dy = -δ + [p]x ω``, ``dS/dω_a = [e_a]x C - C [e_a]x``, so ``∇E = (v, (p + C v) x v)``, and
+
+    ``∇²E = -Jᵀ S⁻¹ J + (sym(v (p + Cv)ᵀ) - v·(p + Cv) I + [v]xᵀ C [v]x - Uᵀ S⁻¹ U)_ωω + (sym part of 2 Uᵀ S⁻¹ J)``
+
+    with ``J = [-I, [p]x]`` and ``U = C [v]x - [C v]x`` (the columns ``dS/dω_a v``). The cost ``-Σ exp(E)`` has
+    Hessian ``-Σ exp(E) (∇E ∇Eᵀ + ∇²E)``; its Gauss-Newton matrix keeps only ``Σ exp(E) Jᵀ S⁻¹ J`` (positive
+    semi-definite).
+    """
+    keep = np.flatnonzero(pairs.log_terms >= pairs.log_terms.max() - NEGLIGIBLE)
+    terms = np.exp(pairs.log_terms[keep])
+    determinants = pairs.determinants[keep]
+    v = (pairs.adjugate_y[:, keep] / determinants).T
+    moving_index = pairs.moving_index[keep]
+    p, c = pairs.rotated[moving_index], pairs.rotated_covariances[moving_index]
+    cv = np.einsum("nab,nb->na", c, v)
+    grad_log = np.concatenate([v, np.cross(p + cv, v)], axis=1)  # ∇E, (n_pairs, 6)
+    gradient = -(terms @ grad_log)
+    if not hessians:
+        return gradient
+    inverse = (pairs.adjugates[:, keep] / determinants).T[:, _FULL]  # S⁻¹, (n_pairs, 3, 3)
+    (gauss_newton,) = pose_matrices(p, terms[:, None, None] * inverse)
+    skew_v = (v @ _SKEW).reshape(-1, 3, 3)
+    c_skew_v = c @ skew_v
+    u = c_skew_v - (cv @ _SKEW).reshape(-1, 3, 3)
+    inverse_u = inverse @ u
+    # Σ_n terms_n X_nᵀ Y_n for stacks of 3x3 matrices, as one product over the rows (n, k) of X_nkа and Y_nkb.
+    weighted_rows = np.repeat(terms, 3)[:, None]
+
+    def weighted_sum(x, y):
+        return (weighted_rows * x.reshape(-1, 3)).T @ y.reshape(-1, 3)
+
+    mixed = weighted_sum(inverse_u, (p @ _SKEW).reshape(-1, 3, 3))
+    spin = (terms[:, None] * v).T @ (p + cv)
+    second = np.zeros((6, 6))  # Σ exp(E) times ∇²E's parts beyond -Jᵀ S⁻¹ J
+    second[3:, 3:] = (weighted_sum(skew_v, c_skew_v) - weighted_sum(u, inverse_u) + mixed + mixed.T
+                      + 0.5 * (spin + spin.T) - np.trace(spin) * np.eye(3))
+    second[3:, :3] = -(terms @ inverse_u.reshape(-1, 9)).reshape(3, 3).T
+    second[:3, 3:] = second[3:, :3].T
+    exact = gauss_newton - grad_log.T @ (terms[:, None] * grad_log) - second
+    return gradient, gauss_newton, exact
+
+
+def d2d_cost(params, tables, with_grad):
     """D2D cost of the BFGS pose vector, and its gradient.
 
     Parameters
     ----------
     params : ndarray of shape (7,)
         ``(t', q)``.
-    fixed, moving : FittedMixture
-    centre : ndarray of shape (3,)
+    tables : PairTables
     with_grad : bool
 
     Returns
@@ -78,46 +208,28 @@ def d2d_cost(params, fixed, moving, centre, with_grad):
     gradient : ndarray of shape (7,), only when ``with_grad``
     """
     rotation, jacobian = rotation_and_jacobian(params[3:])
-    cost, _, _, terms, v, _ = _pairs(rotation, params[:3], fixed, moving, centre)
+    pairs = _pairs(rotation, params[:3], tables)
     if not with_grad:
-        return cost
-    grad_moved, outer = _moving_derivatives(terms, v)
-    # Through y: d f / d R = Σⱼ gⱼ (μⱼ - c)ᵀ. Through S: df/dS = -½ terms v vᵀ, and dS/dR gives
-    # df/dR = -Σⱼ Oⱼ R Σⱼ.
-    grad_rotation = grad_moved.T @ (moving.means - centre) - np.einsum("jab,bc,jcd->ad", outer, rotation,
-                                                                         moving.covariances)
-    grad_quaternion = np.einsum("ab,jab->j", grad_rotation, jacobian)
-    return cost, np.concatenate([grad_moved.sum(axis=0), grad_quaternion])
+        return pairs.cost
+    gradient = _derivatives(pairs, hessians=False)
+    # dR/dq_k = [ω_k]x R (R stays a rotation), and <½ [g]x R, [ω]x R> = g·ω: the quaternion gradient of ω's g.
+    grad_rotation = 0.5 * (gradient[3:] @ _SKEW).reshape(3, 3) @ rotation
+    return pairs.cost, np.concatenate([gradient[:3], np.einsum("ab,jab->j", grad_rotation, jacobian)])
 
 
-def d2d_pose_cost(fixed, moving, centre):
+def d2d_pose_cost(tables):
     """The D2D cost as :func:`~dgmm.registration.solvers.minimise_gauss_newton` evaluates it.
-
-    The gradient is exact. The Gauss-Newton matrix weighs each moving mean by ``Σᵢ termsᵢⱼ Sᵢⱼ⁻¹`` (the EM
-    majoriser of ``-log(-f)``, which has the same minimiser, times ``-f``); the second matrix is the exact Hessian
-    in the moving means, ``Σᵢ termsᵢⱼ (Sᵢⱼ⁻¹ - vᵢⱼ vᵢⱼᵀ)`` plus the curvature of the rotation. Both leave out the
-    second-order terms of the rotating covariances, so the last steps converge linearly.
 
     Returns
     -------
     evaluate : callable
         ``evaluate(rotation, translation) -> (cost, derivatives)``; ``derivatives() -> (gradient (6,),
-        gauss_newton (6, 6), means_hessian (6, 6))``.
+        gauss_newton (6, 6), exact Hessian (6, 6))`` (see :func:`_derivatives`).
     """
 
     def evaluate(rotation, translation):
-        cost, rotated, rotated_covariances, terms, v, inverse = _pairs(rotation, translation, fixed, moving, centre)
-
-        def derivatives():
-            grad_moved, outer = _moving_derivatives(terms, v)
-            weight = np.einsum("ij,sij->js", terms, inverse)[:, _FULL]
-            gradient, (hessian, means_hessian) = pose_derivatives(rotated, grad_moved, weight, weight - outer)
-            means_hessian[3:, 3:] += rotation_curvature(rotated, grad_moved)
-            # The covariances turn with ω: dS/dω_a = [e_a]x C - C [e_a]x gives d f / d ω = -Σ ε (C O).
-            gradient[3:] -= np.einsum("abc,jbd,jdc->a", LEVI_CIVITA, rotated_covariances, outer)
-            return gradient, hessian, means_hessian
-
-        return cost, derivatives
+        pairs = _pairs(rotation, translation, tables)
+        return pairs.cost, partial(_derivatives, pairs, hessians=True)
 
     return evaluate
 
@@ -145,6 +257,8 @@ def register_d2d(fixed, moving, initial_rotation=None, initial_translation=None,
     options : dict, optional
         Options of the solver (see :func:`dgmm.registration.register_p2d`).
     solver : {"bfgs", "gauss-newton"}, default="bfgs"
+        The paper's BFGS, or damped Newton steps on 6 dof with the exact Hessian (Gauss-Newton where it is not
+        positive definite): the same optimum, several times faster.
 
     Returns
     -------
@@ -155,12 +269,13 @@ def register_d2d(fixed, moving, initial_rotation=None, initial_translation=None,
     fixed_mix = FittedMixture.from_fitted("fixed", fixed)
     moving_mix = FittedMixture.from_fitted("moving", moving)
     centre = moving_mix.centroid
+    tables = PairTables.of(fixed_mix, moving_mix, centre)
     x0 = params_from_pose(np.eye(3) if initial_rotation is None else initial_rotation,
                           np.zeros(3) if initial_translation is None else initial_translation, centre)
     radius = np.sqrt(moving_mix.weights @ np.sum((moving_mix.means - centre) ** 2, axis=1))
     if solver == "gauss-newton":
         rotation = initial_rotation if initial_rotation is not None else np.eye(3)
-        return minimise_gauss_newton("d2d", d2d_pose_cost(fixed_mix, moving_mix, centre), centre, radius,
+        return minimise_gauss_newton("d2d", d2d_pose_cost(tables), centre, radius,
                                      np.asarray(rotation, dtype=np.float64), x0[:3], callback, options)
-    cost = partial(d2d_cost, fixed=fixed_mix, moving=moving_mix, centre=centre)
+    cost = partial(d2d_cost, tables=tables)
     return minimise_bfgs("d2d", cost, centre, TRANSLATION_UNIT * radius, x0, gradient, callback, options)

@@ -106,6 +106,7 @@ def minimise_bfgs(method, cost, centre, length, x0, gradient, callback, options)
 _GAUSS_NEWTON_DEFAULTS = {"max_iter": 100, "tol": 1e-8, "damping": 1e-4, "max_step": 0.3}
 _MIN_DAMPING, _MAX_DAMPING = 1e-12, 1e12
 _STRETCH = (2.0, 4.0, 8.0)
+_BACKTRACKS = 3
 
 
 def pose_derivatives(rotated, gradient, *weights):
@@ -125,9 +126,17 @@ def pose_derivatives(rotated, gradient, *weights):
     gradient : ndarray of shape (6,)
         ``(Σ g_n, Σ p_n x g_n)``: ``dy/dδ = I`` and ``dy/dω = -[p_n]x``.
     matrices : list of ndarray of shape (6, 6)
-        ``Σ J_nᵀ W_n J_n`` with ``J_n = [I, -[p_n]x]`` for each weight, from one product of the weights with
-        ``(1, p_n, p_n p_nᵀ)``.
+        :func:`pose_matrices` of the weights.
     """
+    moments = rotated.T @ gradient  # Σ p_n g_nᵀ; Σ p_n x g_n is its antisymmetric part
+    torque = [moments[1, 2] - moments[2, 1], moments[2, 0] - moments[0, 2], moments[0, 1] - moments[1, 0]]
+    return np.concatenate([gradient.sum(axis=0), torque]), pose_matrices(rotated, *weights)
+
+
+def pose_matrices(rotated, *weights):
+    """``Σ J_nᵀ W_n J_n`` over ``(δ, ω)`` with ``J_n = [I, -[p_n]x]`` (``dy_n`` of ``y_n = exp([ω]x) p_n + ... + δ``)
+    for each stack of symmetric weights ``W_n`` (n, 3, 3), from one product of the weights with
+    ``(1, p_n, p_n p_nᵀ)``; ``rotated`` is ``p_n`` (n, 3). Returns a list of (6, 6) arrays."""
     basis = np.column_stack([np.ones(len(rotated)), rotated, (rotated[:, :, None] * rotated[:, None, :]).reshape(-1, 9)])
     sums = (np.concatenate([w.reshape(-1, 9) for w in weights], axis=1).T @ basis).reshape(len(weights), 3, 3, 13)
     matrices = []
@@ -140,9 +149,7 @@ def pose_derivatives(rotated, gradient, *weights):
         hessian[3:, :3] = -cross.T
         hessian[3:, 3:] = -np.einsum("aec,dfb,cdef->ab", LEVI_CIVITA, LEVI_CIVITA, m[:, :, 4:].reshape(3, 3, 3, 3))
         matrices.append(hessian)
-    moments = rotated.T @ gradient  # Σ p_n g_nᵀ; Σ p_n x g_n is its antisymmetric part
-    torque = [moments[1, 2] - moments[2, 1], moments[2, 0] - moments[0, 2], moments[0, 1] - moments[1, 0]]
-    return np.concatenate([gradient.sum(axis=0), torque]), matrices
+    return matrices
 
 
 def rotation_curvature(rotated, gradient):
@@ -207,32 +214,53 @@ def minimise_gauss_newton(method, evaluate, centre, length, rotation, translatio
         newton = exact is not None and _positive_definite(exact)
         if newton:
             hessian = exact
+        iteration += 1
         while True:
             step = _capped(_damped_step(hessian, gradient, damping), scale, max_step)
-            new_rotation, new_translation = exp_rotation(step[3:]) @ rotation, translation + step[:3]
-            new_cost, new_derivatives = evaluate(new_rotation, new_translation)
             converged = np.max(np.abs(step) / scale) < tol
-            if new_cost <= cost or converged or damping > _MAX_DAMPING:
+            if converged:  # the pose moves by less than tol: no need to evaluate it
+                break
+            found = _line_search(evaluate, rotation, translation, cost, gradient @ step, step, scale, max_step,
+                                 not newton)
+            if found is not None or damping > _MAX_DAMPING:
                 break
             damping *= 10.0
-        if new_cost > cost:
-            if not converged:
-                break
-        else:
-            # Far from the optimum the Gauss-Newton (EM) steps fall short: stretch a kept one while the cost falls.
-            for factor in (_STRETCH if not newton and not converged else ()):
-                far = _capped(factor * step, scale, max_step)
-                far_rotation, far_translation = exp_rotation(far[3:]) @ rotation, translation + far[:3]
-                far_cost, far_derivatives = evaluate(far_rotation, far_translation)
-                if far_cost >= new_cost:
-                    break
-                new_rotation, new_translation, new_cost, new_derivatives = far_rotation, far_translation, far_cost, far_derivatives
-            rotation, translation, cost, derivatives = new_rotation, new_translation, new_cost, new_derivatives
+        if found is None and not converged:
+            break
+        if not converged:
+            rotation, translation, cost, derivatives = found
             damping = max(damping / 10.0, _MIN_DAMPING)
-        iteration += 1
         if callback is not None:
             callback(iteration, snapshot(cost, iteration, False))
     return snapshot(cost, iteration, converged)
+
+
+def _line_search(evaluate, rotation, translation, cost, slope, step, scale, max_step, stretch):
+    """The first pose along ``step`` that lowers the cost: the full step, else up to 3 shorter ones (the minimum
+    of the parabola through the cost, its slope and the last trial, kept within 0.1–0.5 of it). With ``stretch``
+    (Gauss-Newton steps, which fall short far from the optimum like EM steps) a full step that lowers the cost is
+    stretched 2, 4, 8 times while the cost keeps falling. Returns ``(rotation, translation, cost, derivatives)``,
+    or None."""
+    def at(length):
+        move = _capped(length * step, scale, max_step)
+        new_rotation, new_translation = exp_rotation(move[3:]) @ rotation, translation + move[:3]
+        return (new_rotation, new_translation, *evaluate(new_rotation, new_translation))
+
+    found, length = at(1.0), 1.0
+    for _ in range(_BACKTRACKS):
+        if found[2] <= cost:
+            break
+        curvature = found[2] - cost - slope * length
+        length *= np.clip(-slope * length / (2.0 * curvature), 0.1, 0.5) if curvature > 0 else 0.1
+        found = at(length)
+    if found[2] > cost:
+        return None
+    for factor in (_STRETCH if stretch and length == 1.0 else ()):
+        far = at(factor)
+        if far[2] >= found[2]:
+            break
+        found = far
+    return found
 
 
 def check_solver(solver, gradient):
