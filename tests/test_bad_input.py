@@ -222,7 +222,10 @@ def test_ctrl_c_exits_130_and_leaves_no_output(tmp_path):
     """SIGINT once the fit's recordings exist as partial files: exit 130, one line, nothing left behind."""
     args = ["fit", SHARED_DATA / "stanford" / "bunny_res2.ply", "-k", 100, "--init", "random", "--iterations", 100000,
             "-o", tmp_path / "m.npz", "--mcap", tmp_path / "m.mcap", "--rrd", tmp_path / "m.rrd"]
-    run = subprocess.Popen([DGMM, *map(str, args)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    # SIGINT at its default in the child: a test run started in the background (`make test &`) ignores it, and
+    # Python keeps an inherited SIG_IGN instead of raising KeyboardInterrupt.
+    run = subprocess.Popen([DGMM, *map(str, args)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                           preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     deadline = time.monotonic() + 120
     while not any(tmp_path.iterdir()) and run.poll() is None and time.monotonic() < deadline:
         time.sleep(0.05)
