@@ -290,6 +290,15 @@ def test_d2d_solvers_reach_the_same_optimum(bunny, bunny_trial):
         assert reg.registration_errors(newton, trial, bunny.diagonal)[0] < 1e-4
 
 
+def test_gauss_newton_started_at_the_optimum_stops_there(bunny):
+    """A mixture registered to itself from the identity: the first step is below tol, so the solver stops at once
+    with the identity (it used to fail on the step it never took)."""
+    result = reg.register_d2d(bunny.mixture, bunny.mixture, solver="gauss-newton")
+    assert result.converged and result.iterations == 1
+    np.testing.assert_allclose(result.rotation, np.eye(3), atol=1e-9)
+    np.testing.assert_allclose(result.translation, 0.0, atol=1e-9 * bunny.diagonal)
+
+
 # ----------------------------------------------------------------------------------- recovering a pose
 @pytest.mark.slow
 @pytest.mark.parametrize("gradient", ["analytic", "numeric"])

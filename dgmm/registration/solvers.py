@@ -134,9 +134,9 @@ def pose_derivatives(rotated, gradient, *weights):
 
 
 def pose_matrices(rotated, *weights):
-    """``Σ J_nᵀ W_n J_n`` over ``(δ, ω)`` with ``J_n = [I, -[p_n]x]`` (``dy_n`` of ``y_n = exp([ω]x) p_n + ... + δ``)
-    for each stack of symmetric weights ``W_n`` (n, 3, 3), from one product of the weights with
-    ``(1, p_n, p_n p_nᵀ)``; ``rotated`` is ``p_n`` (n, 3). Returns a list of (6, 6) arrays."""
+    """``Σ J_nᵀ W_n J_n`` over ``(δ, ω)`` with ``J_n = [I, -[p_n]x]`` (``dy_n`` of
+    ``y_n = exp([ω]x) p_n + ... + δ``) for each stack of symmetric weights ``W_n`` (n, 3, 3), from one product of
+    the weights with ``(1, p_n, p_n p_nᵀ)``; ``rotated`` is ``p_n`` (n, 3). Returns a list of (6, 6) arrays."""
     basis = np.column_stack([np.ones(len(rotated)), rotated, (rotated[:, :, None] * rotated[:, None, :]).reshape(-1, 9)])
     sums = (np.concatenate([w.reshape(-1, 9) for w in weights], axis=1).T @ basis).reshape(len(weights), 3, 3, 13)
     matrices = []
@@ -215,6 +215,7 @@ def minimise_gauss_newton(method, evaluate, centre, length, rotation, translatio
         if newton:
             hessian = exact
         iteration += 1
+        found = None
         while True:
             step = _capped(_damped_step(hessian, gradient, damping), scale, max_step)
             converged = np.max(np.abs(step) / scale) < tol
@@ -225,11 +226,11 @@ def minimise_gauss_newton(method, evaluate, centre, length, rotation, translatio
             if found is not None or damping > _MAX_DAMPING:
                 break
             damping *= 10.0
-        if found is None and not converged:
-            break
-        if not converged:
+        if found is not None:
             rotation, translation, cost, derivatives = found
             damping = max(damping / 10.0, _MIN_DAMPING)
+        elif not converged:
+            break
         if callback is not None:
             callback(iteration, snapshot(cost, iteration, False))
     return snapshot(cost, iteration, converged)
