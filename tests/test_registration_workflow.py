@@ -20,8 +20,8 @@ from tests.test_recording import read_blueprint, read_mcap, read_rrd, xyz
 from tests.workflow import RERUN, TABLE_SHA256, TEST_CONFIG, run_snakemake, sha256
 
 REG = TEST_CONFIG["registration"]
-COLUMNS = ["model", "mesh", "protocol", "variant", "method", "trial", "rotation_error_deg", "translation_error_pct", "iterations",
-           "converged"]
+COLUMNS = ["model", "mesh", "protocol", "variant", "method", "trial", "rotation_error_deg", "translation_error_pct",
+           "iterations", "converged"]
 pytestmark = pytest.mark.slow
 
 
@@ -104,7 +104,8 @@ def test_table_has_every_trial_of_every_method(workdir, table):
     n_chunks = -(-max(e["trials"] for e in REG["experiments"].values()) // REG["trials_per_chunk"])
     assert n_chunks >= 2  # the tiny config still splits trials into chunks
     assert len(chunk_folders(workdir / "results")) == sum(
-        len(method_settings(e["methods"])) * -(-e["trials"] // REG["trials_per_chunk"]) for e in REG["experiments"].values())
+        len(method_settings(e["methods"])) * -(-e["trials"] // REG["trials_per_chunk"])
+        for e in REG["experiments"].values())
 
 
 def test_table_bytes_are_the_recorded_ones(workdir):
@@ -134,8 +135,8 @@ def test_methods_see_identical_trials_within_the_protocol(workdir):
         assert params["diagonal"] == pytest.approx(diagonal, rel=1e-12)
         for trial, true_pose, _ in trials:
             quaternion, position = pose(true_pose)
-            seen[model, mesh, trial["trial"]][method, variant] = (tuple(quaternion), tuple(position), tuple(trial["centre"]),
-                                                         trial["source_sha256"])
+            seen[model, mesh, trial["trial"]][method, variant] = (tuple(quaternion), tuple(position),
+                                                                  tuple(trial["centre"]), trial["source_sha256"])
             # Authors' protocol: Euler angles within ±15° (static xyz axes), the centre moved by at most
             # 0.05 * diagonal / 0.24077 per axis.
             angles = Rotation.from_quat(quaternion).as_euler("xyz", degrees=True)
@@ -185,7 +186,8 @@ def test_every_rrd_verifies_and_shows_the_first_trials_moving(workdir, table):
     assert len(gmms) == n_mixtures and len(recordings) == len(chunk_folders(results)) + len(gmms)
     verify = subprocess.run([str(RERUN), "rrd", "verify", *map(str, recordings)], capture_output=True, text=True)
     assert verify.returncode == 0, verify.stderr
-    iterations = {(r["model"], r["mesh"], r["variant"], r["method"], int(r["trial"])): int(r["iterations"]) for r in table}
+    iterations = {(r["model"], r["mesh"], r["variant"], r["method"], int(r["trial"])): int(r["iterations"])
+                  for r in table}
     for gmm in gmms:  # the P2D methods' fit
         assert read_blueprint(gmm.parent / "fit.rrd")[0] == "iteration"
     for folder in chunk_folders(results):

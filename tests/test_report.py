@@ -352,7 +352,8 @@ def test_table1_has_five_models_with_finite_numbers(built):
     assert [row["model"] for row in rows] == list(MODELS)
     for m, row in enumerate(rows):
         assert row["mesh"] == table1_mesh(row["model"])
-        assert all(np.isfinite(float(value)) for key, value in row.items() if key not in ("model", "mesh", "variant", "protocol"))
+        assert all(np.isfinite(float(value)) for key, value in row.items()
+                   if key not in ("model", "mesh", "variant", "protocol"))
         assert (float(row["ll_mesh"]), float(row["ll_points"])) == (8.0 - m, 7.0 - m)
 
 

@@ -41,7 +41,6 @@ class PairTables:
     offsets : ndarray of shape (n_moving, 3)
         ``μⱼ - c``.
     moving_covariances : ndarray of shape (n_moving, 3, 3)
-    log_moving_weights : ndarray of shape (n_moving,)
     log_weights : ndarray of shape (n_fixed, n_moving)
         ``log πᵢ + log πⱼ``.
     inverse_widths : ndarray of shape (n_fixed, n_moving)
@@ -60,7 +59,6 @@ class PairTables:
     fixed_covariances: np.ndarray
     offsets: np.ndarray
     moving_covariances: np.ndarray
-    log_moving_weights: np.ndarray
     log_weights: np.ndarray
     inverse_widths: np.ndarray
     normals: np.ndarray
@@ -74,12 +72,13 @@ class PairTables:
         fixed_values, fixed_vectors = np.linalg.eigh(fixed.covariances)
         moving_widths = np.linalg.eigvalsh(moving.covariances)[:, 2]
         normals = fixed_vectors[:, :, 0]
-        log_moving = np.log(moving.weights)
-        return cls(fixed, fixed.means.T.copy(), fixed.covariances[:, _ROWS, _COLS].T.copy(), moving.means - centre, moving.covariances, log_moving,
-                   np.log(fixed.weights)[:, None] + log_moving[None, :],
-                   1.0 / (fixed_values[:, 2:] + moving_widths[None, :]), normals,
-                   normals[:, _ROWS] * normals[:, _COLS] * np.where(_ROWS == _COLS, 1.0, 2.0), fixed_values[:, 0],
-                   centre)
+        return cls(fixed=fixed, fixed_means=fixed.means.T.copy(),
+                   fixed_covariances=fixed.covariances[:, _ROWS, _COLS].T.copy(), offsets=moving.means - centre,
+                   moving_covariances=moving.covariances,
+                   log_weights=np.log(fixed.weights)[:, None] + np.log(moving.weights)[None, :],
+                   inverse_widths=1.0 / (fixed_values[:, 2:] + moving_widths[None, :]), normals=normals,
+                   normal_outer=normals[:, _ROWS] * normals[:, _COLS] * np.where(_ROWS == _COLS, 1.0, 2.0),
+                   thickness=fixed_values[:, 0], centre=centre)
 
     def candidates(self, moved, rotated_covariances):
         """Indices ``(i, j)`` of the pairs whose term may be within ``e^-NEGLIGIBLE`` of the largest.
@@ -91,7 +90,7 @@ class PairTables:
         """
         fixed = self.fixed
         floor = (quadratic_features(moved - fixed.origin) @ fixed.log_density_table
-                 - fixed.log_normalisers + np.log(fixed.weights) + self.log_moving_weights[:, None]).max()
+                 - fixed.log_normalisers + self.log_weights.T).max()
         squared = np.sum(fixed.means ** 2, axis=1)[:, None] + np.sum(moved ** 2, axis=1)[None, :]
         squared -= 2.0 * fixed.means @ moved.T
         squared *= self.inverse_widths

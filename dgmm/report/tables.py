@@ -17,7 +17,7 @@ import numpy as np
 from dgmm.report import paper
 from dgmm.shared_responsibility import PER_POINT_MEASURE
 from dgmm.sweep import SIZED
-from dgmm.trials import NO_VARIANT
+from dgmm.trials import NO_VARIANT, method_variants
 
 FIG2_EXPRESSIONS = ("triangle", "centroid", "area x centroid")
 TABLE1_MESH = "quadric1000"  # the mesh of Table 1 (the data stage's quadric decimation), except for ...
@@ -103,28 +103,24 @@ def registration_settings(rows):
 def registration_errors(rows, protocol="scaled", variant="textbook"):
     """Errors of every registration trial run under a trial protocol with mixtures from an EM variant.
 
-    A method's rows are those of ``variant``, else (methods run under one variant only: ICP and CPD, point
-    mixtures) its only ones, "none" or textbook (``dgmm.trials.method_variants``). Rows without ``protocol`` or
-    ``variant`` columns count as scaled and textbook.
+    A method's rows are those of the variant it runs under when ``variant`` is asked for
+    (``dgmm.trials.method_variants``: ``variant`` for mesh mixtures, textbook for point mixtures, "none" for ICP
+    and CPD). Rows without ``protocol`` or ``variant`` columns count as scaled trials run as under textbook EM.
 
     Returns
     -------
     dict
         ``(model, mesh, method) -> {"rot": ndarray of shape (n_trials,), "trans": ndarray of shape (n_trials,)}``.
     """
-    groups = defaultdict(lambda: defaultdict(lambda: {name: [] for name in ERRORS}))
+    groups = defaultdict(lambda: {name: [] for name in ERRORS})
     for row in rows:
-        if row.get("protocol", "scaled") != protocol:
-            continue
-        errors = groups[row["model"], row["mesh"], row["method"]][row.get("variant", "textbook")]
-        for name, column in ERRORS.items():
-            errors[name].append(float(row[column]))
-    chosen = {}
-    for key, by_variant in groups.items():
-        own = variant if variant in by_variant else next(iter(by_variant)) if len(by_variant) == 1 else None
-        if own == variant or own == NO_VARIANT or (own == "textbook" and key[2].startswith("points")):
-            chosen[key] = {name: np.array(values) for name, values in by_variant[own].items()}
-    return chosen
+        method = row["method"]
+        own = method_variants(method, [variant])[0]
+        if (row.get("protocol", "scaled") == protocol
+                and row.get("variant", method_variants(method, ["textbook"])[0]) == own):
+            for name, column in ERRORS.items():
+                groups[row["model"], row["mesh"], method][name].append(float(row[column]))
+    return {key: {name: np.array(values) for name, values in errors.items()} for key, errors in groups.items()}
 
 
 def table1_mesh(model):
@@ -184,10 +180,10 @@ def table1(means, errors=None, variant="textbook", protocol="scaled"):
 
 
 def table1_columns():
-    """Column order of ``table1.csv``: model, mesh, EM variant, trial protocol, each measure as ours and the paper's, then the coarse-to-fine
-    P2D's errors (ours only)."""
-    return ["model", "mesh", "variant", "protocol", *(name for column in paper.TABLE1_COLUMNS for name in (column, f"{column}_paper")),
-            *TABLE1_C2F_COLUMNS]
+    """Column order of ``table1.csv``: model, mesh, EM variant, trial protocol, each measure as ours and the
+    paper's, then the coarse-to-fine P2D's errors (ours only)."""
+    return ["model", "mesh", "variant", "protocol",
+            *(name for column in paper.TABLE1_COLUMNS for name in (column, f"{column}_paper")), *TABLE1_C2F_COLUMNS]
 
 
 def format_number(value, digits=2):

@@ -23,8 +23,8 @@ shown = trimesh.Trimesh(vertices, faces, process=False)
 
 with threadpool_limits(smk.threads), FitRecorder(smk.output.mcap, smk.output.rrd, params=params, data=shown) as rec:
     rec.begin_seed(0)
-    model = fit_mixture(w.method, vertices, faces, n_components=n_components, variant=w.variant, seed=seed, callback=rec,
-                        **settings)
+    model = fit_mixture(w.method, vertices, faces, n_components=n_components, variant=w.variant, seed=seed,
+                        callback=rec, **settings)
     rec.end_seed(model)
 save_model(smk.output.gmm, model, {**params, "n_iter": model.n_iter_, "bound": model.lower_bound_})
 print(f"{key}: {model.n_iter_} iterations, bound {model.lower_bound_:.4f}", file=sys.stderr)
