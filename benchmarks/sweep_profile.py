@@ -49,8 +49,9 @@ def read_rows(path):
 
 
 def job_times(results):
-    """rule -> [(job wall seconds, job CPU seconds, computation seconds or None)] from the benchmark files under
-    ``results`` (Snakemake's ``s`` and ``cpu_time`` columns)."""
+    """rule -> [(job wall seconds, computation seconds or None)] from the benchmark files under ``results``
+    (Snakemake's ``s`` column; not its ``cpu_time``, which counts only the job's process, and a job of the sweep
+    computes in a fork of the job server)."""
     jobs = defaultdict(list)
     root = results / "benchmarks"
     for path in sorted(root.rglob("*.tsv")):
@@ -62,24 +63,22 @@ def job_times(results):
             table, columns = COMPUTATION[rule]
             job = relative.relative_to(rule).with_suffix("").as_posix()
             computation = sum(float(r[c]) for r in read_rows(results / table(job)) for c in columns)
-        jobs[rule].append((float(row["s"]), float(row["cpu_time"]), computation))
+        jobs[rule].append((float(row["s"]), computation))
     return jobs
 
 
 def rule_table(jobs):
-    """Markdown table per rule: jobs, mean and total job wall time, mean job CPU time, mean computation, and the
-    median overhead (job wall - computation, and job CPU - computation)."""
-    lines = ["| rule | jobs | mean job wall (s) | sum of job walls (s) | mean job CPU (s) | mean computation (s) "
-             "| median overhead, wall (s) | median overhead, CPU (s) |",
-             "|---|---:|---:|---:|---:|---:|---:|---:|"]
-    for rule, times in sorted(jobs.items(), key=lambda item: -sum(w for w, _, _ in item[1])):
-        walls, cpus = [w for w, _, _ in times], [c for _, c, _ in times]
-        timed = [(w, c, t) for w, c, t in times if t is not None]
-        comp = f"{mean(t for _, _, t in timed):.2f}" if timed else "–"
-        over = f"{median(w - t for w, _, t in timed):.2f}" if timed else "–"
-        over_cpu = f"{median(c - t for _, c, t in timed):.2f}" if timed else "–"
-        lines.append(f"| {rule} | {len(times)} | {mean(walls):.2f} | {sum(walls):.0f} | {mean(cpus):.2f} | {comp} "
-                     f"| {over} | {over_cpu} |")
+    """Markdown table per rule: jobs, mean and total job wall time, mean computation, and the median overhead
+    (job wall - computation)."""
+    lines = ["| rule | jobs | mean job wall (s) | sum of job walls (s) | mean computation (s) "
+             "| median overhead (s) |",
+             "|---|---:|---:|---:|---:|---:|"]
+    for rule, times in sorted(jobs.items(), key=lambda item: -sum(w for w, _ in item[1])):
+        walls = [w for w, _ in times]
+        timed = [(w, t) for w, t in times if t is not None]
+        comp = f"{mean(t for _, t in timed):.2f}" if timed else "–"
+        over = f"{median(w - t for w, t in timed):.2f}" if timed else "–"
+        lines.append(f"| {rule} | {len(times)} | {mean(walls):.2f} | {sum(walls):.0f} | {comp} | {over} |")
     return "\n".join(lines)
 
 
@@ -110,7 +109,7 @@ def main():
               f"{' / '.join(f'{x:.2f}' for x in load_before)}, after {' / '.join(f'{x:.2f}' for x in load)}. "
               "Per rule, from each job's Snakemake `benchmark:` file (results/benchmarks/) and, for `fit` and "
               "`registration_chunk`, the job's own timing table (its seeds' or trials' seconds): overhead is the "
-              "rest of the job (Python start, imports, loading, scoring, recordings; goal ≤ 1 s median).\n")
+              "rest of the job (starting it, loading, scoring, recordings; goal ≤ 1 s median).\n")
         print(rule_table(job_times(clone / "results")))
     finally:
         if args.keep:

@@ -1,4 +1,8 @@
 """Job: fetch a registered mesh (mirror, cache or download), check its sha256 and write it as canonical PLY."""
+from dgmm.job_server import hand_over
+
+hand_over()  # in a sweep, the rest runs in a fork of the job server, its imports already loaded
+
 import sys
 
 from dgmm.data import REGISTRY, fetch, load_mesh, save_ply

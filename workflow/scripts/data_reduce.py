@@ -1,4 +1,8 @@
 """Job: one pymeshlab sampling or decimation of a mesh to a budget (one per process: its samplers take no seed)."""
+from dgmm.job_server import hand_over
+
+hand_over()  # in a sweep, the rest runs in a fork of the job server, its imports already loaded
+
 import sys
 
 from dgmm.data import load_mesh, save_ply

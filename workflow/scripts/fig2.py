@@ -1,6 +1,10 @@
 """Job: Fig 2. Fit K components to dense random samples of a mesh, then compare likelihood expressions: the
 triangle bound, centroids, area × centroids, the triangles with a responsibility per point, and n sampled points
 (several draws per n)."""
+from dgmm.job_server import hand_over
+
+hand_over()  # in a sweep, the rest runs in a fork of the job server, its imports already loaded
+
 import sys
 
 import trimesh

@@ -1,4 +1,8 @@
 """Job: fit one (model, input, variant, K, init) over every seed; write scores, timings and the recordings."""
+from dgmm.job_server import hand_over
+
+hand_over()  # in a sweep, the rest runs in a fork of the job server, its imports already loaded
+
 import sys
 
 import trimesh

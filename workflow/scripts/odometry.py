@@ -1,5 +1,9 @@
 """Job: frame-to-frame visual odometry of one (sequence, run); write the trajectory, its ATE and RPE, the timings
 and the recordings."""
+from dgmm.job_server import hand_over
+
+hand_over()  # in a sweep, the rest runs in a fork of the job server, its imports already loaded
+
 import sys
 
 from threadpoolctl import threadpool_limits

@@ -1,4 +1,8 @@
 """Job: register one chunk of one (model, mesh)'s trials with one method; write errors, timings, recordings."""
+from dgmm.job_server import hand_over
+
+hand_over()  # in a sweep, the rest runs in a fork of the job server, its imports already loaded
+
 import sys
 
 from threadpoolctl import threadpool_limits

@@ -1,4 +1,8 @@
 """Job: fit the Gaussian mixture of one P2D registration method on one model's mesh, with its recordings."""
+from dgmm.job_server import hand_over
+
+hand_over()  # in a sweep, the rest runs in a fork of the job server, its imports already loaded
+
 import sys
 
 import trimesh

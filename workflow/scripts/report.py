@@ -1,4 +1,8 @@
 """Job: the report (Table 1, claims, figures) from the sweep's tables into the report folder."""
+from dgmm.job_server import hand_over
+
+hand_over()  # in a sweep, the rest runs in a fork of the job server, its imports already loaded
+
 import sys
 from pathlib import Path
 

@@ -1,0 +1,100 @@
+"""The job server runs scripts in forks of a preloaded process, with their streams, exit codes and signals."""
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from dgmm.job_server import ADDRESS_VARIABLE, JobServer, script_imports
+
+HAND_OVER = "from dgmm.job_server import hand_over\nhand_over()\n"
+
+
+@pytest.fixture
+def server(tmp_path, monkeypatch):
+    """A server preloading ``probe``, a module that records which process imported it."""
+    (tmp_path / "probe.py").write_text("import os\nIMPORTED_BY = os.getpid()\n")
+    monkeypatch.setenv("PYTHONPATH", str(tmp_path))
+    monkeypatch.chdir(tmp_path)
+    server = JobServer(["probe"]).start()
+    yield server
+    server.stop()
+
+
+def script(tmp_path, name, body):
+    path = tmp_path / name
+    path.write_text(HAND_OVER + body)
+    return str(path)
+
+
+def alive(pid):
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    return True
+
+
+def test_a_script_runs_in_a_fork_of_the_server_with_its_modules_loaded(server, tmp_path):
+    job = script(tmp_path, "job.py", "import os, sys, probe\n"
+                                     "print(os.getppid(), probe.IMPORTED_BY, os.getcwd(), os.environ['PROBE'])\n"
+                                     "print('to stderr', file=sys.stderr)\n")
+    (tmp_path / "work").mkdir()
+    run = subprocess.run([sys.executable, job], cwd=tmp_path / "work", env={**os.environ, "PROBE": "x"},
+                         capture_output=True, text=True, timeout=60)
+    parent, imported_by, cwd, probe = run.stdout.split()
+    assert run.returncode == 0 and run.stderr == "to stderr\n"
+    assert int(parent) == int(imported_by) == server._process.pid  # forked from the server, module from before
+    assert (cwd, probe) == (str(tmp_path / "work"), "x")
+
+
+def test_without_a_server_the_script_runs_in_its_own_process(tmp_path, monkeypatch):
+    (tmp_path / "probe.py").write_text("import os\nIMPORTED_BY = os.getpid()\n")
+    job = script(tmp_path, "job.py", "import os, probe\nprint(os.getpid() == probe.IMPORTED_BY)\n")
+    env = {**os.environ, "PYTHONPATH": str(tmp_path), ADDRESS_VARIABLE: str(tmp_path / "no-such-socket")}
+    run = subprocess.run([sys.executable, job], env=env, capture_output=True, text=True, timeout=60)
+    assert (run.returncode, run.stdout) == (0, "True\n")
+
+
+@pytest.mark.parametrize("body, code, stderr", [
+    ("raise ValueError('bad input')\n", 1, "ValueError: bad input"),
+    ("import sys\nsys.exit(3)\n", 3, ""),
+    ("import sys\nsys.exit('one line')\n", 1, "one line"),
+])
+def test_the_exit_status_and_error_are_the_script_s(server, tmp_path, body, code, stderr):
+    run = subprocess.run([sys.executable, script(tmp_path, "job.py", body)], capture_output=True, text=True,
+                         timeout=60)
+    assert run.returncode == code
+    assert stderr in run.stderr
+
+
+@pytest.mark.parametrize("how", ["interrupt", "kill"])
+def test_stopping_the_script_stops_its_fork(server, tmp_path, how):
+    job = script(tmp_path, "job.py", "import os, time\nprint(os.getpid(), flush=True)\ntime.sleep(60)\n")
+    client = subprocess.Popen([sys.executable, job], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    fork = int(client.stdout.readline())
+    client.send_signal(signal.SIGINT if how == "interrupt" else signal.SIGKILL)
+    code = client.wait(timeout=10)
+    deadline = time.monotonic() + 5
+    while alive(fork) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert not alive(fork)
+    if how == "interrupt":  # as Python itself: a KeyboardInterrupt traceback, then death by SIGINT
+        assert code == -signal.SIGINT and "KeyboardInterrupt" in client.stderr.read()
+    client.stderr.close()
+    client.stdout.close()
+
+
+def test_stop_removes_the_socket_and_unsets_the_address(server):
+    address = os.environ[ADDRESS_VARIABLE]
+    server.stop()
+    assert ADDRESS_VARIABLE not in os.environ and not Path(address).parent.exists()
+
+
+def test_script_imports_lists_absolute_imports_once_in_order(tmp_path):
+    (tmp_path / "a.py").write_text('"""doc"""\nimport sys\nfrom dgmm.data import load_mesh\nfrom . import x\n')
+    (tmp_path / "b.py").write_text("import numpy as np, sys\nfrom dgmm.data import save_ply\n")
+    assert script_imports([tmp_path / "a.py", tmp_path / "b.py"]) == ["sys", "dgmm.data", "numpy"]
