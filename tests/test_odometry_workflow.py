@@ -18,7 +18,7 @@ from dgmm.odometry import first_frames, seconds_summary
 from dgmm.tum import read_sequence
 from dgmm.tables import read_csv
 from tests.test_recording import read_blueprint, read_mcap, read_rrd, xyz
-from tests.workflow import RERUN, TEST_CONFIG, TEST_CONFIG_FILE, run_snakemake
+from tests.workflow import RERUN, TABLE_SHA256, TEST_CONFIG, TEST_CONFIG_FILE, run_snakemake, sha256
 
 RUNS = {"gmm-pixels-textbook": ("gmm-pixels", "textbook"), "gmm-points-textbook": ("gmm-points", "textbook"),
         "icp": ("icp", "")}
@@ -67,6 +67,10 @@ def test_every_output_exists(stage):
     with Image.open(stage / "odometry" / "fig6.png") as image:
         assert min(image.size) > 300
     assert not list(stage.rglob("*.part")) and not list(stage.rglob("*.tmp"))
+
+
+def test_table_is_the_one_recorded_before_the_sweep_s_overhead_was_cut(stage):
+    assert sha256(stage / "tables" / "odometry.csv") == TABLE_SHA256["odometry.csv"]
 
 
 @pytest.mark.slow
