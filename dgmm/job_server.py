@@ -3,7 +3,7 @@
 A cold sweep runs hundreds of jobs of a second's work each, and each used to spend about two more seconds
 starting Python and importing scikit-learn, trimesh, rerun and this library. One :class:`JobServer` per sweep
 (the Snakefile starts it) imports them once; a job script that calls :func:`hand_over` first sends the server
-its script path, working directory, environment and standard streams, and waits. The server forks, the fork
+its command line, working directory, environment and standard streams, and waits. The server forks, the fork
 runs the script from the top (its imports are already loaded, and ``hand_over`` returns at once there), and
 the fork's exit status becomes the script's. A signal to the waiting script (Ctrl-C, Snakemake cancelling the
 job) goes on to the fork, and a script that dies kills its fork. Without a server (a script run by hand, a
@@ -45,7 +45,7 @@ def hand_over():
     if not address:
         return
     connection = socket.socket(socket.AF_UNIX, socket.SOCK_SEQPACKET)
-    request = dict(script=os.path.abspath(sys.argv[0]), cwd=os.getcwd(), env=dict(os.environ))
+    request = dict(argv=[os.path.abspath(sys.argv[0]), *sys.argv[1:]], cwd=os.getcwd(), env=dict(os.environ))
     try:
         connection.connect(address)
         socket.send_fds(connection, [json.dumps(request).encode()], [0, 1, 2])
@@ -192,8 +192,8 @@ def _run_job(request, fds, inherited):
         os.environ.clear()
         os.environ.update(request["env"])
         del os.environ[ADDRESS_VARIABLE]  # so that the script's own hand_over returns
-        sys.argv = [request["script"]]
-        runpy.run_path(request["script"], run_name="__main__")
+        sys.argv = request["argv"]
+        runpy.run_path(sys.argv[0], run_name="__main__")
         code = 0
     except SystemExit as exit_:
         code = exit_.code if isinstance(exit_.code, int) else 0 if exit_.code is None else 1

@@ -40,15 +40,16 @@ def alive(pid):
 
 def test_a_script_runs_in_a_fork_of_the_server_with_its_modules_loaded(server, tmp_path):
     job = script(tmp_path, "job.py", "import os, sys, probe\n"
-                                     "print(os.getppid(), probe.IMPORTED_BY, os.getcwd(), os.environ['PROBE'])\n"
+                                     "print(os.getppid(), probe.IMPORTED_BY, os.getcwd(), os.environ['PROBE'],\n"
+                                     "      sys.argv[1:])\n"
                                      "print('to stderr', file=sys.stderr)\n")
     (tmp_path / "work").mkdir()
-    run = subprocess.run([sys.executable, job], cwd=tmp_path / "work", env={**os.environ, "PROBE": "x"},
-                         capture_output=True, text=True, timeout=60)
-    parent, imported_by, cwd, probe = run.stdout.split()
+    run = subprocess.run([sys.executable, job, "--flag", "value"], cwd=tmp_path / "work",
+                         env={**os.environ, "PROBE": "x"}, capture_output=True, text=True, timeout=60)
+    parent, imported_by, cwd, probe, arguments = run.stdout.split(maxsplit=4)
     assert run.returncode == 0 and run.stderr == "to stderr\n"
     assert int(parent) == int(imported_by) == server._process.pid  # forked from the server, module from before
-    assert (cwd, probe) == (str(tmp_path / "work"), "x")
+    assert (cwd, probe, arguments) == (str(tmp_path / "work"), "x", "['--flag', 'value']\n")
 
 
 def test_without_a_server_the_script_runs_in_its_own_process(tmp_path, monkeypatch):
