@@ -13,7 +13,8 @@ SNAKEMAKE = Path(sys.executable).with_name("snakemake")
 RERUN = Path(sys.executable).with_name("rerun")
 # sha256 of the tables tests/config.yaml gives, recorded at main 38794a7 before the sweep's overhead was cut
 # (issue 15; odometry.csv at c343ddf, before the job server): changes to how jobs run must leave every number as it
-# was. They hold for this machine's numpy and OpenBLAS; a platform whose arithmetic differs in the last bits changes them, and then they are updated on purpose.
+# was. They hold for this machine's numpy and OpenBLAS; a platform whose arithmetic differs in the last bits
+# changes them, and then they are updated on purpose.
 TABLE_SHA256 = {
     "likelihood.csv": "aef0b7af7411d294a796b6ae0600ea7cd026bf54058e4e416f70cd26b5f44668",
     "registration.csv": "329969245482da8dd9d4c8a111defafdacaeac767b5991e32b1a6200e767c2ad",
