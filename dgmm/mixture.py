@@ -334,7 +334,7 @@ class GaussianMixture(BaseEstimator):
     memory_limit : int, default=128 MiB
         Bytes of responsibilities EM may hold at once. An input whose ``(n_prims, n_components)``
         responsibilities (8 (n_components + 24) bytes per primitive) fit is one block: exactly the unblocked
-        EM. A larger one streams through blocks of 2 MiB (or ``memory_limit`` if smaller) per thread, which
+        EM. A larger one streams through blocks of 8 MiB (or ``memory_limit`` if smaller) per thread, which
         stay in the CPU cache; beside them a fit holds 12 floats per primitive (plus its input). Blocks
         depend on nothing else, so the result is the same for any ``n_jobs``; another block size changes it
         by rounding only (about 1e-14 of each parameter's scale per iteration).

@@ -18,7 +18,7 @@ def test_blocks_cover_the_rows_in_order_within_the_limit():
     with BlockPass(1000, 50, memory_limit=8 * 74 * 300, n_jobs=2) as blocks:
         assert block_rows(1000, 50, 8 * 74 * 300) == 300
         assert block_rows(1000, 50, 8 * 74 * 1000) == 1000  # fits: one block
-        assert block_rows(10**7, 50, 2**30) == 2**21 // (8 * 74)  # streamed: cache-sized blocks
+        assert block_rows(10**7, 50, 2**30) == 2**23 // (8 * 74)  # streamed: 8 MiB blocks
         starts = [rows.start for rows in blocks.blocks]
         assert starts == [0, 300, 600, 900] and blocks.blocks[-1].stop == 1000
         # sums in block order: the same as a plain sum of the row indices
