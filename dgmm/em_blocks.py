@@ -8,8 +8,9 @@ table, ``respᵀ · moments`` of shape ``(n_components, 10)``, and each primitiv
 An input whose responsibilities fit in the memory limit is one block, computed exactly as without blocks (every
 fit of the paper sweep is). A larger one streams in blocks of :data:`CACHE_BLOCK_BYTES`: EM's passes over a
 block then stay in the CPU cache, which makes them several times faster than over one large block, and each
-block is enough work that the threads' hand-offs between blocks cost little beside it. Blocks depend only on the input size, ``n_components`` and the memory limit, and their partial sums
-are added in block order, so the thread count never changes a bit of the result.
+block is enough work that the threads' hand-offs between blocks cost little beside it. Blocks depend only on
+the input size, ``n_components`` and the memory limit, and their partial sums are added in block order, so
+the thread count never changes a bit of the result.
 """
 from __future__ import annotations
 
@@ -23,10 +24,10 @@ import numpy as np
 DEFAULT_MEMORY_LIMIT = 128 * 2**20
 """Bytes of responsibilities (and their row features) that may be held at once: larger inputs stream."""
 CACHE_BLOCK_BYTES = 8 * 2**20
-"""Bytes of one streamed block. Measured on 2 cores, interleaved in one run (benchmarks/em_scale.py's meshes,
-69k–1.1M triangles, K = 100 and 1000): one thread takes the same time per iteration with 2 and 8 MiB blocks
-(within 3%), two threads 1.60–1.73x one thread with 2 MiB blocks and 1.79–1.95x with 8 MiB; with 0.5 MiB blocks
-two threads gain almost nothing (every block costs a few GIL and futex hand-offs between the threads)."""
+"""Bytes of one streamed block. ``benchmarks/em_block_size.py`` on 2 cores (69k–1.1M triangles, K = 100 and
+1000): one thread takes the same time per iteration with 2 and 8 MiB blocks, two threads 1.56–1.72x one thread
+with 2 MiB blocks and 1.91–1.98x with 8 MiB; with 0.5 MiB blocks two threads gain little (1.1–1.25x: every block
+costs a few GIL and futex hand-offs between the threads)."""
 _ROW_FLOATS = 24  # float64 per row beside the responsibilities: E-step features, weighted moments, row sums
 
 _controller = None

@@ -167,7 +167,7 @@ def _report_exit(selector, exit_watch, connection, pid):
     _, status = os.waitpid(pid, 0)
     selector.unregister(exit_watch)
     os.close(exit_watch)
-    if connection in (key.fileobj for key in selector.get_map().values()):
+    if connection in selector.get_map():  # not if the client has closed its end already
         selector.unregister(connection)
     try:
         connection.send(str(os.waitstatus_to_exitcode(status)).encode())
