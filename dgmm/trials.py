@@ -170,7 +170,24 @@ class TrialSetup:
 
 PROTOCOLS = ("scaled", "literal")
 """Trial translations: ``scaled`` by the model's diagonal over the bunny's, or the authors' ``literal`` ±0.05 in
-the model's own units (registration_test.py, written for the bunny in metres, where both coincide)."""
+the model's own units (registration_test.py, written for the bunny in metres, where both coincide). The P2D
+mixtures' covariance floor follows the same choice (:func:`protocol_reg_covar`)."""
+
+
+def protocol_reg_covar(reg_covar, diagonal, protocol):
+    """The covariance floor of a registration mixture under ``protocol``.
+
+    ``reg_covar`` (scikit-learn's absolute 1e-6, as the authors ran it) is a variance in the model's units: on the
+    bunny, in metres, it keeps every component at least 1 mm (0.4% of the diagonal) thick, but on the models in
+    millimetres it allows components a thousandth of a millimetre thick, flat sheets on a 2 m statue. ``scaled``
+    transfers the bunny's floor with the trials, ``reg_covar * (diagonal / BUNNY_DIAGONAL) ** 2``, so that a model
+    and a scaled copy of it get scaled copies of one mixture; ``literal`` keeps ``reg_covar`` as it is.
+    """
+    if protocol not in PROTOCOLS:
+        raise InputError(f"trial protocol {protocol!r}: must be one of {PROTOCOLS}")
+    if not (np.isfinite(diagonal) and diagonal > 0):
+        raise InputError(f"diagonal must be a positive number, got {diagonal}")
+    return float(reg_covar * (diagonal / BUNNY_DIAGONAL) ** 2) if protocol == "scaled" else float(reg_covar)
 
 
 def make_trials(dense, n_points, indices, *, root_seed, key, diagonal, max_angle_deg=15.0, max_translation=0.05,

@@ -181,7 +181,8 @@ def test_every_rrd_verifies_and_shows_the_first_trials_moving(workdir, table):
     results = workdir / "results"
     recordings = sorted(results.glob("registration/**/*.rrd"))
     gmms = sorted(results.glob("registration/**/gmm.npz"))
-    n_mixtures = len({(mixture_source(m), v) for e in REG["experiments"].values()
+    n_mixtures = len({(model, e["mesh"], protocol, mixture_source(m), v) for e in REG["experiments"].values()
+                      for model in e["models"] for protocol in e.get("protocols", ["scaled"])
                       for m, v in method_settings(e["methods"]) if METHODS[m].needs_mixture})
     assert len(gmms) == n_mixtures and len(recordings) == len(chunk_folders(results)) + len(gmms)
     verify = subprocess.run([str(RERUN), "rrd", "verify", *map(str, recordings)], capture_output=True, text=True)

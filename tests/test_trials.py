@@ -1,11 +1,13 @@
 """dgmm.trials: seeded trials shared by every method, the methods table, run_trials on known poses."""
 import numpy as np
 import pytest
+import trimesh
 from scipy.spatial.transform import Rotation
 
 from dgmm.errors import InputError
 from dgmm.mixture import GaussianMixture
-from dgmm.trials import METHODS, bounding_diagonal, make_trials, mixture_source, run_trials
+from dgmm.trials import (METHODS, PROTOCOLS, bounding_diagonal, fit_mixture, make_trials, mixture_source,
+                         protocol_reg_covar, run_trials)
 
 
 def sphere_points(n, seed=0):
@@ -90,3 +92,26 @@ def test_literal_protocol_draws_the_authors_translations_in_model_units():
         assert np.all(np.abs(b.trial.translation) <= 0.05)
     with pytest.raises(InputError, match="protocol"):
         make_trials(dense, 100, [0], root_seed=0, key="k", diagonal=diagonal, protocol="metres")
+
+
+def test_scaled_protocol_fits_a_scaled_copy_of_the_mixture_to_a_scaled_copy_of_the_model():
+    """Under ``scaled`` a model in millimetres gets the mixture of the same model in metres, times 1000; ``literal``
+    keeps the absolute floor, which binds on a box's flat faces in metres and not in millimetres."""
+    box = trimesh.creation.box(extents=[0.2, 0.12, 0.08]).subdivide().subdivide()
+    metres, faces = np.asarray(box.vertices), np.asarray(box.faces)
+    fits = {}
+    for protocol in PROTOCOLS:
+        for unit in (1.0, 1000.0):
+            vertices = metres * unit
+            reg_covar = protocol_reg_covar(1e-4, bounding_diagonal(vertices), protocol)
+            fits[protocol, unit] = fit_mixture("mesh-kmeans", vertices, faces, n_components=6, max_iter=30, tol=1e-9,
+                                               reg_covar=reg_covar, variant="textbook", seed=0)
+    small, large = fits["scaled", 1.0], fits["scaled", 1000.0]
+    np.testing.assert_allclose(large.weights_, small.weights_, rtol=1e-6)
+    np.testing.assert_allclose(large.means_, 1000.0 * small.means_, rtol=1e-6, atol=1e-6)
+    np.testing.assert_allclose(large.covariances_, 1e6 * small.covariances_, rtol=1e-5, atol=1e-3)
+    thinnest = {unit: np.sqrt(np.linalg.eigvalsh(fits["literal", unit].covariances_)[:, 0].min()) / unit
+                for unit in (1.0, 1000.0)}  # in metres
+    assert thinnest[1000.0] < 0.1 * thinnest[1.0]  # the floor: 1e-4 mm² against 1e-4 m²
+    with pytest.raises(InputError, match="protocol"):
+        protocol_reg_covar(1e-6, 1.0, "metres")

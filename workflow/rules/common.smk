@@ -143,7 +143,8 @@ def registration_mixture(wildcards):
     if not METHODS[wildcards.method].needs_mixture:
         return {}
     source = mixture_source(wildcards.method)
-    return {"gmm": f"{RESULTS}/registration/{wildcards.model}/{wildcards.mesh}/{wildcards.variant}/{source}/gmm.npz"}
+    w = wildcards
+    return {"gmm": f"{RESULTS}/registration/{w.model}/{w.mesh}/{w.protocol}/{w.variant}/{source}/gmm.npz"}
 
 
 # Visual odometry

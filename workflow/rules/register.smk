@@ -3,16 +3,15 @@
 # points are drawn from the Poisson-disk evaluation set of the mesh the registered mesh comes from (res4's own,
 # else the full model's). Each experiment runs under its trial protocols (scaled, literal) and each mesh mixture
 # under every EM variant of registration.variants (dgmm.trials.method_variants; ICP and CPD under "none").
-# Under results/registration/{model}/{mesh}/:
-#   {variant}/{method}/gmm.npz, fit.mcap, fit.rrd   P2D methods: the mixture, fitted once and used by every chunk
-#                                and protocol, and its fit logs (*-c2f methods use their paper P2D's mixture)
-# and under results/registration/{model}/{mesh}/{protocol}/{variant}/{method}/:
+# Under results/registration/{model}/{mesh}/{protocol}/{variant}/{method}/:
+#   gmm.npz, fit.mcap, fit.rrd   P2D methods: the mixture, fitted once and used by every chunk, and its fit logs
+#                                (*-c2f methods use their paper P2D's mixture; its covariance floor follows the
+#                                protocol, dgmm.trials.protocol_reg_covar)
 #   c{chunk}/errors.csv          one row per trial: errors, iterations, convergence (deterministic)
 #   c{chunk}/seconds.csv         each trial's wall time (kept apart so that errors stay byte-identical)
 #   c{chunk}/trials.mcap         every trial's true and estimated pose, errors, iterations and time (Foxglove)
 #   c{chunk}/trials.rrd          the chunk's first trials: source points moving iteration by iteration
 # and results/tables/registration.csv, registration_seconds.csv gather every chunk.
-GMM_DIR = f"{RESULTS}/registration/{{model}}/{{mesh}}/{{variant}}/{{method}}"
 REG_DIR = f"{RESULTS}/registration/{{model}}/{{mesh}}/{{protocol}}/{{variant}}/{{method}}"
 REG_WILDCARDS = dict(
     model="|".join(REGISTRY),
@@ -30,13 +29,13 @@ rule registration_gmm:
     input:
         mesh=f"{DATA_DIR}/{{model}}/{{mesh}}.ply",
     output:
-        gmm=f"{GMM_DIR}/gmm.npz",
-        mcap=f"{GMM_DIR}/fit.mcap",
-        rrd=f"{GMM_DIR}/fit.rrd",
+        gmm=f"{REG_DIR}/gmm.npz",
+        mcap=f"{REG_DIR}/fit.mcap",
+        rrd=f"{REG_DIR}/fit.rrd",
     log:
-        f"{RESULTS}/logs/registration/{{model}}/{{mesh}}/{{variant}}/{{method}}/gmm.log",
+        f"{RESULTS}/logs/registration/{{model}}/{{mesh}}/{{protocol}}/{{variant}}/{{method}}/gmm.log",
     benchmark:
-        f"{RESULTS}/benchmarks/registration_gmm/{{model}}/{{mesh}}/{{variant}}/{{method}}.tsv"
+        f"{RESULTS}/benchmarks/registration_gmm/{{model}}/{{mesh}}/{{protocol}}/{{variant}}/{{method}}.tsv"
     wildcard_constraints:
         **REG_WILDCARDS,
     threads: 1

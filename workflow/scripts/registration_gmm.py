@@ -1,4 +1,4 @@
-"""Job: fit the Gaussian mixture of one P2D registration method on one model's mesh, with its recordings."""
+"""Job: fit the Gaussian mixture of one P2D registration method on one model's mesh under one trial protocol."""
 from dgmm.job_server import hand_over
 
 hand_over()  # in a sweep, the rest runs in a fork of the job server, its imports already loaded
@@ -12,7 +12,7 @@ from dgmm.data import load_mesh
 from dgmm.model_io import save_model
 from dgmm.recording import FitRecorder
 from dgmm.sweep import job_seed
-from dgmm.trials import fit_mixture
+from dgmm.trials import bounding_diagonal, fit_mixture, protocol_reg_covar
 
 smk = snakemake  # noqa: F821 (injected by Snakemake)
 sys.stderr = open(smk.log[0], "w")
@@ -20,8 +20,10 @@ w, p = smk.wildcards, smk.params
 key = f"registration/{w.model}/{w.mesh}/{w.method}"
 vertices, faces = load_mesh(smk.input.mesh)
 settings = dict(p.mixture)
+settings["reg_covar"] = protocol_reg_covar(settings["reg_covar"], bounding_diagonal(vertices), w.protocol)
 seed = job_seed(p.seed, key, 0)
-params = dict(model=w.model, mesh=w.mesh, method=w.method, variant=w.variant, **settings, seed=seed, root_seed=p.seed)
+params = dict(model=w.model, mesh=w.mesh, protocol=w.protocol, method=w.method, variant=w.variant, **settings,
+              seed=seed, root_seed=p.seed)
 n_components = settings.pop("components")
 shown = trimesh.Trimesh(vertices, faces, process=False)
 
