@@ -13,9 +13,9 @@ SNAKEMAKE = Path(sys.executable).with_name("snakemake")
 RERUN = Path(sys.executable).with_name("rerun")
 # sha256 of the tables tests/config.yaml gives, recorded at main 38794a7 before the sweep's overhead was cut
 # (issue 15; odometry.csv at c343ddf, before the job server; registration.csv again when the scaled protocol's
-# mixtures got their scaled covariance floor, which moves the bunny's by a factor 1.00012): changes to how jobs run
-# must leave every number as it was. They hold for this machine's numpy and OpenBLAS; a platform whose arithmetic differs in the last bits
-# changes them, and then they are updated on purpose.
+# mixtures got their scaled covariance floor, which moves the bunny's by a factor 1.00012): changes to how jobs
+# run must leave every number as it was. They hold for this machine's numpy and OpenBLAS; a platform whose
+# arithmetic differs in the last bits changes them, and then they are updated on purpose.
 TABLE_SHA256 = {
     "likelihood.csv": "aef0b7af7411d294a796b6ae0600ea7cd026bf54058e4e416f70cd26b5f44668",
     "registration.csv": "b2de3242a76cfc53ce0932545c8a03d66bd83df7da4f5262485646b58888b000",
