@@ -174,6 +174,14 @@ the model's own units (registration_test.py, written for the bunny in metres, wh
 mixtures' covariance floor follows the same choice (:func:`protocol_reg_covar`)."""
 
 
+def _protocol_length(diagonal, protocol):
+    """The length the bunny's diagonal stands for under ``protocol``: the model's ``diagonal`` (``scaled``), or
+    the bunny's own in the model's units (``literal``)."""
+    if protocol not in PROTOCOLS:
+        raise InputError(f"trial protocol {protocol!r}: must be one of {PROTOCOLS}")
+    return diagonal if protocol == "scaled" else BUNNY_DIAGONAL
+
+
 def protocol_reg_covar(reg_covar, diagonal, protocol):
     """The covariance floor of a registration mixture under ``protocol``.
 
@@ -183,11 +191,10 @@ def protocol_reg_covar(reg_covar, diagonal, protocol):
     transfers the bunny's floor with the trials, ``reg_covar * (diagonal / BUNNY_DIAGONAL) ** 2``, so that a model
     and a scaled copy of it get scaled copies of one mixture; ``literal`` keeps ``reg_covar`` as it is.
     """
-    if protocol not in PROTOCOLS:
-        raise InputError(f"trial protocol {protocol!r}: must be one of {PROTOCOLS}")
-    if not (np.isfinite(diagonal) and diagonal > 0):
+    length = _protocol_length(diagonal, protocol)
+    if not (np.isfinite(length) and length > 0):
         raise InputError(f"diagonal must be a positive number, got {diagonal}")
-    return float(reg_covar * (diagonal / BUNNY_DIAGONAL) ** 2) if protocol == "scaled" else float(reg_covar)
+    return float(reg_covar * (length / BUNNY_DIAGONAL) ** 2)
 
 
 def make_trials(dense, n_points, indices, *, root_seed, key, diagonal, max_angle_deg=15.0, max_translation=0.05,
@@ -216,9 +223,7 @@ def make_trials(dense, n_points, indices, *, root_seed, key, diagonal, max_angle
     -------
     list of TrialSetup
     """
-    if protocol not in PROTOCOLS:
-        raise InputError(f"trial protocol {protocol!r}: must be one of {PROTOCOLS}")
-    scale = diagonal if protocol == "scaled" else BUNNY_DIAGONAL  # random_trials scales by scale / BUNNY_DIAGONAL
+    scale = _protocol_length(diagonal, protocol)  # random_trials scales by scale / BUNNY_DIAGONAL
     dense = np.asarray(dense, dtype=np.float64)
     if dense.ndim != 2 or dense.shape[1] != 3:
         raise InputError(f"dense sample must have shape (n_points, 3), got {dense.shape}")
