@@ -21,6 +21,7 @@ include: "workflow/rules/fit.smk"
 include: "workflow/rules/likelihood.smk"
 include: "workflow/rules/register.smk"
 include: "workflow/rules/odometry.smk"
+include: "workflow/rules/checks.smk"
 include: "workflow/rules/report.smk"
 
 

@@ -22,6 +22,7 @@ FIT = config["fit"]
 REG = config["registration"]
 ODO = config["odometry"]
 ODO_DIR = f"{RESULTS}/odometry"
+CHECKS = config.get("checks", {})
 SYNTHETIC_SEQUENCE = f"{ODO_DIR}/synthetic/sequence"
 REPORT_DIR = config.get("report", {}).get("dir", "reports")
 PICTURE_BUDGET = 1000  # Fig 7 shows the paper's 1000-primitive decimations and samples
@@ -34,6 +35,7 @@ def get_final_output():
         *rules.fits.input,
         *rules.registration.input,
         *rules.odometry.input,
+        *rules.checks.input,
         *rules.report.output,
     ]
 
@@ -190,6 +192,33 @@ def odometry_run_params(wildcards):
     return {"method": method, "variant": variant or "textbook", "intrinsics": camera}
 
 
+# Checks
+
+
+CHECK_TABLES = {
+    # checks.<section> -> {report input key: table}
+    "convergence": {"convergence": "convergence.csv"},
+    "resampling": {"resampling": "resampling.csv"},
+    "optimisers": {"optimisers": "optimisers.csv", "optimisers_seconds": "optimisers_seconds.csv"},
+    "timing": {"timing_seconds": "timing_seconds.csv"},
+}
+
+
+def convergence_outputs():
+    """Rows of every configured convergence job: one per (input, variant) of ``checks.convergence``."""
+    check = CHECKS.get("convergence")
+    if not check:
+        return []
+    return [f"{RESULTS}/checks/convergence/{check['model']}/{name}/{variant}.csv"
+            for name in check["inputs"] for variant in variants_for(name, FIT["variants"])]
+
+
+def checks_outputs():
+    """The tables of the configured checks: ``{report input key: path}``."""
+    return {key: f"{RESULTS}/tables/{table}" for section, tables in CHECK_TABLES.items() if section in CHECKS
+            for key, table in tables.items()}
+
+
 # Report
 
 
@@ -198,8 +227,13 @@ def report_inputs():
     inputs = {"likelihood": rules.likelihood_table.output.likelihood, "fig2": rules.fig2.output.table}
     if "registration" in config:
         inputs["registration"] = rules.registration_table.output.errors
+    if "registration" in config:
+        inputs["registration_seconds"] = rules.registration_table.output.seconds
+    inputs["fit_seconds"] = rules.likelihood_table.output.seconds
     if "odometry" in config:
-        inputs.update(odometry=f"{RESULTS}/tables/odometry.csv", fig6=f"{RESULTS}/odometry/fig6.png")
+        inputs.update(odometry=f"{RESULTS}/tables/odometry.csv", fig6=f"{RESULTS}/odometry/fig6.png",
+                      odometry_seconds=f"{RESULTS}/tables/odometry_seconds.csv")
+    inputs.update(checks_outputs())
     if "bunny" in DATA["models"]:
         inputs.update(
             res4=f"{DATA_DIR}/bunny/res4.ply",
