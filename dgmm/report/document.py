@@ -16,7 +16,7 @@ table{border-collapse:collapse;margin:.8rem 0}td,th{border:1px solid #bbb;paddin
 td:first-child,th:first-child{text-align:left}figure{margin:1rem 0}img{max-width:100%}
 figcaption{font-size:.9rem;color:#444}li{margin:.4rem 0}h1{margin:.5rem 0}
 table.summary{font-size:.8rem;line-height:1.25}table.summary td{vertical-align:top}
-table.summary td,table.summary th{text-align:left}table.summary td:nth-child(2){text-align:center}
+table.summary td,table.summary th{text-align:left}
 .badge{display:inline-block;padding:.1rem .45rem;border-radius:.7rem;color:#fff;font-weight:bold;white-space:nowrap}
 .reproduced{background:#1a7f37}.partly{background:#bf8700}.not-reproduced{background:#cf222e}
 .pending{background:#6e7781}"""
