@@ -209,14 +209,21 @@ def convergence_outputs():
     check = CHECKS.get("convergence")
     if not check:
         return []
-    return [f"{RESULTS}/checks/convergence/{check['model']}/{name}/{variant}.csv"
-            for name in check["inputs"] for variant in variants_for(name, FIT["variants"])]
+    return [
+        f"{RESULTS}/checks/convergence/{check['model']}/{name}/{variant}.csv"
+        for name in check["inputs"]
+        for variant in variants_for(name, FIT["variants"])
+    ]
 
 
 def checks_outputs():
     """The tables of the configured checks: ``{report input key: path}``."""
-    return {key: f"{RESULTS}/tables/{table}" for section, tables in CHECK_TABLES.items() if section in CHECKS
-            for key, table in tables.items()}
+    return {
+        key: f"{RESULTS}/tables/{table}"
+        for section, tables in CHECK_TABLES.items()
+        if section in CHECKS
+        for key, table in tables.items()
+    }
 
 
 # Report
@@ -231,8 +238,11 @@ def report_inputs():
         inputs["registration_seconds"] = rules.registration_table.output.seconds
     inputs["fit_seconds"] = rules.likelihood_table.output.seconds
     if "odometry" in config:
-        inputs.update(odometry=f"{RESULTS}/tables/odometry.csv", fig6=f"{RESULTS}/odometry/fig6.png",
-                      odometry_seconds=f"{RESULTS}/tables/odometry_seconds.csv")
+        inputs.update(
+            odometry=f"{RESULTS}/tables/odometry.csv",
+            fig6=f"{RESULTS}/odometry/fig6.png",
+            odometry_seconds=f"{RESULTS}/tables/odometry_seconds.csv",
+        )
     inputs.update(checks_outputs())
     if "bunny" in DATA["models"]:
         inputs.update(
