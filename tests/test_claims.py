@@ -174,7 +174,7 @@ def test_pixels_against_points_is_what_the_paper_compares():
             {**odometry_row("fr3", "", "", ""), "frames": "", "missing_folder": "../data/fr3"}]
     claim = odometry.pixels_beat_points(Measurements(odometry=rows))
     assert verdicts(claim) == {"authors": "reproduced", "textbook": "not reproduced"}
-    assert "fr1 pixels 0.300 m, points 0.400 m (+25.0%), icp 0.100 m" in claim.evidence
+    assert "fr1 pixels 0.300 m, points 0.400 m (+33.3%), icp 0.100 m" in claim.evidence
     assert "Pending: fr3 (folder ../data/fr3 missing)" in claim.evidence
     assert odometry.paper_sequence_values(Measurements(odometry=rows)).verdict == "pending"
     rows[1] = odometry_row("fr1", "gmm-points", "textbook", 0.6)

@@ -240,7 +240,7 @@ def _claim_item(claim):
                     and (v == claims.HEADLINE or claim.grades[v].why != claim.grades[claims.HEADLINE].why))
     machine = f" {MACHINE_MARK} Machine dependent." if claim.machine_dependent else ""
     return (f"**{claim.section}: {claim.title}** — {grades}; paper: {claim.paper}.{machine} {whys} "
-            f"Evidence: {claim.evidence} Rule: {claim.rule}.").replace("  ", " ")
+            f"Evidence: {claim.evidence or 'waiting for data.'} Rule: {claim.rule}.").replace("  ", " ")
 
 
 def claim_anchor(index):

@@ -1,7 +1,7 @@
 """Claims of §IV-B "Mesh Decimation" and the Discussion (Fig 4: the full bunny reduced to about 1000 primitives)."""
 from dgmm.report.claims.fitting import robust_to_init
 from dgmm.report.claims.rules import (CLOSE_NATS, FIG3_INPUTS, FIG3_MODEL, FIG4_INPUTS, OFTEN_RULE, REPRODUCED,
-                                      ROBUST_NATS, SAME_NATS, SHARE_RULE, VARIANT_NAMES, VARIANTS, Claim, Grade, best,
+                                      ROBUST_NATS, SAME_NATS, SHARE_RULE, VARIANT_NAMES, VARIANTS, Claim, Grade, missing, best,
                                       cells, init_gaps, is_mesh, lost, often_verdict, pending, same, share_verdict)
 
 POISSON, RANDOM = "poisson1000-points", "random1000-points"
@@ -18,7 +18,8 @@ def _pairwise(data, section, title, winner, loser, paper_words, cause):
         table = {key: cell for key, cell in cells(data.means, FIG3_MODEL, FIG4_INPUTS, variant).items()
                  if {winner, loser} <= cell.keys()}
         if not table:
-            return pending(section, title, rule, f"{winner} and {loser} fits in likelihood.csv", paper_words)
+            grades[variant] = missing(f"{winner} and {loser} fits in likelihood.csv")
+            continue
         failed = [f"{init} K={k} {cell[winner]:.2f} ≤ {cell[loser]:.2f}" for (init, k), cell in table.items()
                   if not cell[winner] > cell[loser]]
         wins = len(table) - len(failed)
@@ -55,7 +56,8 @@ def poisson_kmeans_often_best(data):
         table = cells(data.means, FIG3_MODEL, FIG4_INPUTS, variant)
         ks = sorted({k for init, k in table if POISSON in table.get(("kmeans", k), {})})
         if not ks:
-            return pending(section, title, rule, "Poisson k-means fits in likelihood.csv", "often best")
+            grades[variant] = missing("Poisson k-means fits in likelihood.csv")
+            continue
         tops = {k: max((best(cell, FIG4_INPUTS), f"{name} {init}") for (init, kk), cell in table.items() if kk == k
                        for name in [max(cell, key=cell.get)]) for k in ks}
         failed = [f"K={k} {table[('kmeans', k)][POISSON]:.2f} vs {tops[k][1]} {tops[k][0]:.2f}" for k in ks
@@ -81,7 +83,8 @@ def random_samples_lowest(data):
                 by_k.setdefault(k, {})[name] = max(value, by_k.get(k, {}).get(name, value))
         by_k = {k: inputs for k, inputs in by_k.items() if RANDOM in inputs and len(inputs) > 1}
         if not by_k:
-            return pending(section, title, rule, "random and other Fig 4 fits in likelihood.csv", "lowest")
+            grades[variant] = missing("random and other Fig 4 fits in likelihood.csv")
+            continue
         failed = [f"K={k} random {inputs[RANDOM]:.2f} above {min(inputs, key=inputs.get)} "
                   f"{min(inputs.values()):.2f}" for k, inputs in by_k.items()
                   if inputs[RANDOM] > min(inputs.values()) + SAME_NATS]
@@ -105,7 +108,8 @@ def mesh_reliable(data):
             tops[k] = max(tops.get(k, -float("inf")), best(cell, FIG4_INPUTS))
         tried = [(name, init, k, cell[name]) for (init, k), cell in table.items() for name in cell if is_mesh(name)]
         if not tried:
-            return pending(section, title, rule, "Fig 4 mesh fits in likelihood.csv", "reliable in all tests")
+            grades[variant] = missing("Fig 4 mesh fits in likelihood.csv")
+            continue
         failed = [f"{name} {init} K={k} {value - tops[k]:+.2f}" for name, init, k, value in tried
                   if value < tops[k] - CLOSE_NATS]
         wins = len(tried) - len(failed)
@@ -164,7 +168,8 @@ def exact_never_prefers_random(data):
     for variant in VARIANTS:
         gaps = init_gaps(data.means, FIG3_MODEL, exact, variant)
         if not gaps:
-            return pending(section, title, rule, "exact fits from both starts", "never")
+            grades[variant] = missing("exact fits from both starts")
+            continue
         seen = [f"{name} K={k} {-gap:+.2f}" for (name, k), gap in gaps.items() if -gap > SAME_NATS]
         verdict = share_verdict(len(gaps) - len(seen), len(gaps), 1.0, 0.9)
         lines.append(f"{VARIANT_NAMES[variant]}: random better in {len(seen)} of {len(gaps)}")

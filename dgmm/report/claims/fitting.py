@@ -1,7 +1,7 @@
 """Claims of §IV-A "Mesh Input Data" (Fig 3, bunny res4), Fig 7 and the fitting protocol."""
 from dgmm.report import paper
 from dgmm.report.claims.rules import (FIG3_INPUTS, FIG3_MODEL, GAP_RULE, OFTEN_RULE, REPRODUCED,
-                                      ROBUST_NATS, SAME_NATS, SHARE_RULE, VARIANT_NAMES, VARIANTS, Claim, Grade, best,
+                                      ROBUST_NATS, SAME_NATS, SHARE_RULE, VARIANT_NAMES, VARIANTS, Claim, Grade, missing, best,
                                       cells, gap_verdict, init_gaps, is_mesh, lost, mean, often_verdict, pending, same,
                                       share_verdict)
 
@@ -20,8 +20,8 @@ def fig3_values(data):
         ours = {k: data.means.get((FIG3_MODEL, "res4-exact", variant, "kmeans", k)) for k in paper.FIG3_EXACT_KMEANS}
         gaps = {k: stats[0] - paper.FIG3_EXACT_KMEANS[k] for k, stats in ours.items() if stats is not None}
         if not gaps:
-            return pending(section, title, rule, "res4-exact k-means fits at K = 25, 100, 400 in likelihood.csv",
-                           published)
+            grades[variant] = missing("res4-exact k-means fits at K = 25, 100, 400 in likelihood.csv")
+            continue
         k = max(gaps, key=lambda key: abs(gaps[key]))
         verdict = gap_verdict(gaps[k])
         lines.append(f"{VARIANT_NAMES[variant]}: " + ", ".join(f"K={key} {ours[key][0]:.2f} ({gap:+.2f})"
@@ -46,7 +46,8 @@ def exact_best_approx_second(data):
         table = {key: cell for key, cell in cells(data.means, FIG3_MODEL, FIG3_INPUTS, variant).items()
                  if {"res4-exact", "res4-approx"} <= cell.keys() and cell.keys() & set(POINTS3)}
         if not table:
-            return pending(section, title, rule, "res4 exact, approx and point fits in likelihood.csv", "every K")
+            grades[variant] = missing("res4 exact, approx and point fits in likelihood.csv")
+            continue
         plain, strict, failed = 0, 0, []
         for (init, k), cell in table.items():
             exact, approx, points = cell["res4-exact"], cell["res4-approx"], best(cell, POINTS3)
@@ -71,7 +72,8 @@ def robust_to_init(data, section, title, inputs, paper_words):
     for variant in VARIANTS:
         gaps = init_gaps(data.means, FIG3_MODEL, mesh, variant)
         if not gaps:
-            return pending(section, title, rule, "mesh fits from both k-means and random starts", paper_words)
+            grades[variant] = missing("mesh fits from both k-means and random starts")
+            continue
         wins = sum(abs(gap) <= ROBUST_NATS for gap in gaps.values())
         typical = sorted(gaps.values())[len(gaps) // 2]
         verdict = share_verdict(wins, len(gaps))

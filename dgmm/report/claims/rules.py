@@ -137,10 +137,14 @@ def same(grade):
     return {variant: grade for variant in VARIANTS}
 
 
+def missing(what):
+    """The grade of an EM whose data is missing: ``what`` names the table or run it needs."""
+    return Grade(PENDING, "–", f"Needs {what}.")
+
+
 def pending(section, title, rule, what, paper="", machine_dependent=False):
     """A claim waiting for data: ``what`` names the missing table or run."""
-    return Claim(section, title, rule, f"waiting for data: {what}.", same(Grade(PENDING, "–", f"Needs {what}.")),
-                 paper, machine_dependent)
+    return Claim(section, title, rule, f"waiting for data: {what}.", same(missing(what)), paper, machine_dependent)
 
 
 def lost(comparisons, limit=3):

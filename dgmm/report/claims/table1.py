@@ -2,7 +2,7 @@
 import math
 
 from dgmm.report import paper
-from dgmm.report.claims.rules import (CLOSE_NATS, OFTEN_RULE, SHARE_RULE, VARIANT_NAMES, VARIANTS, Claim, Grade, lost,
+from dgmm.report.claims.rules import (CLOSE_NATS, OFTEN_RULE, SHARE_RULE, VARIANT_NAMES, VARIANTS, Claim, Grade, missing, lost,
                                       often_verdict, pending, share_verdict)
 
 SIGNIFICANT_NATS = 0.5
@@ -23,7 +23,8 @@ def _graded(data, section, title, rule, paper_words, grade, what):
     for variant in VARIANTS:
         result = grade(data.table1(variant))
         if result is None:
-            return pending(section, title, rule, what, paper_words)
+            grades[variant] = missing(what)
+            continue
         grades[variant], line = result
         lines.append(f"{VARIANT_NAMES[variant]}: {line}")
     return Claim(section, title, rule, "; ".join(lines) + ".", grades, paper_words)
