@@ -42,9 +42,7 @@ def pixels_beat_points(data):
         runs = {s: r for s, r in _runs(data.odometry, variant, "ate_rmse_m").items()
                 if {"gmm-pixels", "gmm-points"} <= r.keys()}
         if not runs:
-            absent = "; ".join(_missing(data.odometry))
-            grades[variant] = missing("gmm-pixels and gmm-points runs in odometry.csv"
-                                      + (f" ({absent})" if absent else ""))
+            grades[variant] = missing(f"gmm-pixels and gmm-points runs with {VARIANT_NAMES[variant]} in odometry.csv")
             continue
         failed = [f"{s} {r['gmm-pixels']:.3f} ≥ {r['gmm-points']:.3f} m" for s, r in runs.items()
                   if not r["gmm-pixels"] < r["gmm-points"]]
@@ -108,7 +106,8 @@ def _timing_ratio(data, section, title, rule, methods, column, reproduced, partl
     for variant in VARIANTS:
         runs = {s: r for s, r in _runs(data.odometry_seconds, variant, column).items() if set(methods) <= r.keys()}
         if not runs:
-            grades[variant] = missing(f"{' and '.join(methods)} timings in odometry_seconds.csv")
+            grades[variant] = missing(f"{' and '.join(methods)} timings with {VARIANT_NAMES[variant]} in "
+                                      "odometry_seconds.csv")
             continue
         ratios = {s: r[methods[0]] / r[methods[1]] for s, r in runs.items()}
         ratio = mean(list(ratios.values()))
