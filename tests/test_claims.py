@@ -186,4 +186,5 @@ def test_every_claim_grades_both_ems_and_is_pending_without_data():
     assert len(evaluated) == len(claims.CLAIMS) >= 40
     assert all(set(claim.grades) == set(claims.VARIANTS) for claim in evaluated)
     assert all(claim.verdict == "pending" and claim.why.startswith("Needs ") for claim in evaluated)
+    assert all("\n" not in claim.why for claim in evaluated)  # one cause when both EMs miss the same data
 

@@ -160,7 +160,7 @@ def test_summary_rows_link_each_claim_to_its_details_and_figure():
     assert figure_of(evaluated[1]) == ("Fig 3", "fig3") and figure_of(evaluated[2]) is None
     assert summary_rows(evaluated) == [  # authors' EM (the headline) first
         ["[Fig 2](#fig2)", "[a](#claim-1)", "{{reproduced}} 1", "{{reproduced}} 1", "2"],
-        ["[Figs 3, 4](#fig3)", "[b](#claim-2)\nBecause of c.", "{{reproduced}} 5", "{{partly}} 6", "–"],
+        ["[Figs 3, 4](#fig3)", "[b](#claim-2)\ntextbook EM: Because of c.", "{{reproduced}} 5", "{{partly}} 6", "–"],
         ["§V-A", "[d](#claim-3) ⏱\nBecause of e.", "{{not reproduced}} 3", "{{not reproduced}} 3", "4"]]
     assert SUMMARY_HEADER[2:4] == ["authors' EM (headline)", "textbook EM"]
     page = to_html([("table", ["claim", "verdict"], [row[1:3] for row in summary_rows(evaluated)], "summary")],

@@ -235,9 +235,7 @@ def _grade_text(grade):
 def _claim_item(claim):
     grades = "; ".join(f"{claims.VARIANT_NAMES[v]}: **{claim.grades[v].verdict}** ({claim.grades[v].ours})"
                        for v in claims.VARIANTS)
-    whys = " ".join(f"Why ({claims.VARIANT_NAMES[v]}): {claim.grades[v].why}" for v in claims.VARIANTS
-                    if claim.grades[v].verdict != claims.REPRODUCED and claim.grades[v].why
-                    and (v == claims.HEADLINE or claim.grades[v].why != claim.grades[claims.HEADLINE].why))
+    whys = f"Why: {claim.why}".replace("\n", "; ") if claim.why else ""
     machine = f" {MACHINE_MARK} Machine dependent." if claim.machine_dependent else ""
     return (f"**{claim.section}: {claim.title}** — {grades}; paper: {claim.paper}.{machine} {whys} "
             f"Evidence: {claim.evidence or 'waiting for data.'} Rule: {claim.rule}.").replace("  ", " ")

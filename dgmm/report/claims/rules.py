@@ -105,9 +105,12 @@ class Claim:
 
     @property
     def why(self):
-        """The headline grade's cause, else the other's (when only that one is not reproduced)."""
-        return next((self.grades[v].why for v in (HEADLINE, *VARIANTS) if self.grades[v].verdict != REPRODUCED
-                     and self.grades[v].why), "")
+        """The cause of every grade not reproduced, each named by its EM when the two EMs' causes differ."""
+        causes = {v: self.grades[v].why for v in VARIANTS if self.grades[v].verdict != REPRODUCED
+                  and self.grades[v].why}
+        if len(set(causes.values())) == 1 and len(causes) == len(VARIANTS):
+            return next(iter(causes.values()))
+        return "\n".join(f"{VARIANT_NAMES[v]}: {why}" for v, why in causes.items())
 
 
 def gap_verdict(gap):
