@@ -9,8 +9,12 @@ from dgmm.checks.convergence import coverage, effective_components, iterations_t
 from dgmm.checks.optimisers import _rotvec_params
 from dgmm.checks.resampling import component_integrals, split_in_four
 from dgmm.checks.timing import d2d_cost
+from dgmm.data import load_mesh, load_points
 from dgmm.mixture import GaussianMixture
 from dgmm.primitives import Primitives
+from dgmm.sweep import build_input, fit_seeds
+from dgmm.tables import read_csv
+from tests.workflow import run_snakemake
 
 
 def test_iterations_to_converge_is_the_first_iteration_that_stays_within_the_tolerance():
@@ -77,3 +81,33 @@ def test_split_in_four_keeps_the_surface_and_the_component_integrals(bunny_res4)
     samples = [multivariate_normal.logpdf(points, m, s) for m, s in zip(mixture.means_, mixture.covariances_)]
     errors = np.array([sample.std() / np.sqrt(len(sample)) for sample in samples])
     assert np.all(np.abs(integrals - [sample.mean() for sample in samples]) <= 4 * errors + 1e-3)
+
+
+CHECK_TABLES = ("convergence.csv", "resampling.csv", "optimisers.csv")
+
+
+@pytest.mark.slow  # a real Snakemake run of the check jobs on tests/config.yaml
+def test_check_jobs_write_their_tables_and_rerun_byte_identical(tmp_path):
+    targets = [f"results/tables/{name}" for name in (*CHECK_TABLES, "optimisers_seconds.csv", "timing_seconds.csv")]
+    run = run_snakemake(tmp_path, *targets)
+    assert run.returncode == 0, run.stderr[-3000:]
+    tables = tmp_path / "results" / "tables"
+    first = {name: (tables / name).read_bytes() for name in CHECK_TABLES}
+    convergence = read_csv(tables / "convergence.csv")
+    assert {(row["input"], row["variant"]) for row in convergence} == {
+        ("res4-exact", "textbook"), ("res4-exact", "authors"), ("res4-vertices", "textbook")}
+    # after 25 of its 30 iterations a fit is the fitting sweep's fit of the same seed (tests/config.yaml: none at
+    # K=12, so fit one here the way the sweep does)
+    vertices, faces = load_mesh(tmp_path / "results" / "data" / "bunny" / "res4.ply")
+    row = next(row for row in convergence if row["input"] == "res4-exact" and row["variant"] == "textbook")
+    sweep_rows, _ = fit_seeds(build_input("res4-exact", vertices, faces),
+                              load_points(tmp_path / "results" / "data" / "bunny" / "res4_eval.ply"), n_components=12,
+                              init="kmeans", variant="textbook", n_seeds=1, root_seed=0,
+                              key="bunny/res4-exact/textbook/k12-kmeans", max_iter=25, tol=1e-12, reg_covar=1e-6)
+    assert float(row["eval_ll_25"]) == pytest.approx(sweep_rows[0]["eval_ll"], abs=1e-9)
+    assert {row["check"] for row in read_csv(tables / "timing_seconds.csv")} == {"approximation", "d2d determinant"}
+    for name in CHECK_TABLES:
+        (tables / name).unlink()
+    rerun = run_snakemake(tmp_path, *targets)
+    assert rerun.returncode == 0, rerun.stderr[-3000:]
+    assert {name: (tables / name).read_bytes() for name in CHECK_TABLES} == first

@@ -46,7 +46,7 @@ GAP_RULE = (f"gap rule: |difference| ≤ {SAME_NATS} nat reproduced, ≤ {CLOSE_
 SHARE_RULE = f"share rule: holds in ≥ {MOST:.0%} of comparisons reproduced, ≥ 50% partly, fewer not reproduced"
 OFTEN_RULE = (f"share rule for \"often\": holds in ≥ {OFTEN:.0%} of comparisons reproduced, ≥ 25% partly, fewer "
               "not reproduced")
-MACHINE = "a CPU-time ratio measured within one run: it changes with the machine"
+MACHINE = "a time ratio measured within one run: it changes with the machine and its load"
 
 
 @dataclass(frozen=True)
