@@ -225,7 +225,7 @@ TABLE1_HEADER = ["model (mesh)", "likelihood points", "likelihood mesh", "rotati
 
 
 MACHINE_MARK = "⏱"
-"""Marks a timing claim: CPU-time ratios of one run, which change with the machine."""
+"""Marks a timing claim: time ratios of one run, which change with the machine."""
 
 
 def _grade_text(grade):
@@ -285,7 +285,7 @@ def headline(evaluated):
     return (f"{len(evaluated)} claims of the paper, each graded on the mixtures of both EMs. " + "; ".join(counts)
             + f". The headline verdict is the {claims.VARIANT_NAMES[claims.HEADLINE]}'s (the code that produced "
             "the paper's numbers); textbook EM is the paper's equations 11–13. Claims that fit no mixture to a mesh "
-            f"get the same verdict in both. {MACHINE_MARK}: a CPU-time ratio measured within one run of this "
+            f"get the same verdict in both. {MACHINE_MARK}: a time ratio measured within one run of this "
             "machine (it changes with the machine; its timings are kept out of the byte-identical tables).")
 
 
