@@ -77,11 +77,13 @@ def points_better_with_100(data):
               for row, gain in zip(rows, gains) if not gain > 0]
     wins = len(rows) - len(failed)
     verdict = share_verdict(wins, len(rows))
+    worst = min(gains)
     return Claim(section, title, rule + ". Point fits are the same for both EMs",
                  f"better in {wins} of {len(rows)} fits, mean gain {mean(gains):+.3f} nat.",
                  same(Grade(verdict, f"{wins}/{len(rows)}, mean {mean(gains):+.2f} nat",
-                            lost(failed) and f"Some fits lose likelihood on the evaluation set as they fit their "
-                                             f"{'inputs'} more closely. {lost(failed)}")), "better")
+                            "" if not failed else f"{len(failed)} point fits end lower on the evaluation set after "
+                                                  f"100 iterations than after 25 (down to {worst:+.3f} nat). "
+                                                  f"{lost(failed)}")), "better")
 
 
 def points_nearly_match_at_100(data):

@@ -150,6 +150,11 @@ def pending(section, title, rule, what, paper="", machine_dependent=False):
     return Claim(section, title, rule, f"waiting for data: {what}.", same(missing(what)), paper, machine_dependent)
 
 
+def sentence(text):
+    """``text`` as a sentence: first letter upper case, a final full stop ("" stays "")."""
+    return f"{text[0].upper()}{text[1:]}." if text else ""
+
+
 def lost(comparisons, limit=3):
     """``why`` of a share rule: the first ``limit`` comparisons that did not hold, as one sentence."""
     if not comparisons:
