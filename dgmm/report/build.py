@@ -235,7 +235,7 @@ def _grade_text(grade):
 def _claim_item(claim):
     grades = "; ".join(f"{claims.VARIANT_NAMES[v]}: **{claim.grades[v].verdict}** ({claim.grades[v].ours})"
                        for v in claims.VARIANTS)
-    whys = f"Why: {claim.why}".replace("\n", "; ") if claim.why else ""
+    whys = f"Why: {claim.why}".replace("\n", " ") if claim.why else ""
     machine = f" {MACHINE_MARK} Machine dependent." if claim.machine_dependent else ""
     return (f"**{claim.section}: {claim.title}** — {grades}; paper: {claim.paper}.{machine} {whys} "
             f"Evidence: {claim.evidence or 'waiting for data.'} Rule: {claim.rule}.").replace("  ", " ")
