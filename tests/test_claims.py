@@ -63,7 +63,8 @@ def test_exact_best_approx_second_plain_and_strict_readings():
     # The centroids 0.2 nat above exact at K=25 under the authors' EM: exact not best there, 1 of 2.
     cells["res4-centroids", "textbook", "kmeans", 25] = 8.2
     claim = fitting.exact_best_approx_second(Measurements(likelihood=likelihood(cells)))
-    assert claim.grades["authors"].why.startswith("Res4-centroids beats the exact mesh by a median 0.20 nat in kmeans K=25;")
+    assert claim.grades["authors"].why.startswith(
+        "Res4-centroids beats the exact mesh by a median 0.20 nat in kmeans K=25;")
 
 
 # decimation --------------------------------------------------------------------------------------------------

@@ -1,7 +1,7 @@
 """Claims about convergence (Discussion, Introduction, Conclusion), from the 100-iteration fits of
 ``convergence.csv`` (:mod:`dgmm.checks.convergence`: the Fig 3 sweep's seeds run on to 100 iterations)."""
-from dgmm.report.claims.rules import (CLOSE_NATS, SHARE_RULE, VARIANT_NAMES, VARIANTS, Claim, Grade, missing, NOT, PARTLY,
-                                      REPRODUCED, lost, mean, median, pending, ratio_verdict, same, share_verdict)
+from dgmm.report.claims.rules import (CLOSE_NATS, REPRODUCED, SHARE_RULE, VARIANTS, VARIANT_NAMES, Claim, Grade, lost,
+                                      mean, median, missing, pending, ratio_verdict, same, share_verdict)
 
 CONVERGED = "n_iter_within_0.01"
 """Iterations the bound took to come within 0.01 nat of its value after 100 (convergence.csv)."""

@@ -1,8 +1,9 @@
 """Claims of §IV-B "Mesh Decimation" and the Discussion (Fig 4: the full bunny reduced to about 1000 primitives)."""
 from dgmm.report.claims.fitting import robust_to_init
 from dgmm.report.claims.rules import (CLOSE_NATS, FIG3_INPUTS, FIG3_MODEL, FIG4_INPUTS, OFTEN_RULE, REPRODUCED,
-                                      ROBUST_NATS, SAME_NATS, SHARE_RULE, VARIANT_NAMES, VARIANTS, Claim, Grade, missing, best,
-                                      cells, init_gaps, is_mesh, lost, often_verdict, pending, same, share_verdict)
+                                      ROBUST_NATS, SAME_NATS, SHARE_RULE, VARIANTS, VARIANT_NAMES, Claim, Grade, best,
+                                      cells, init_gaps, is_mesh, lost, missing, often_verdict, pending, same,
+                                      share_verdict)
 
 POISSON, RANDOM = "poisson1000-points", "random1000-points"
 QUADRIC, CLUSTERING = "quadric1000-exact", "clustering1000-exact"

@@ -1,8 +1,8 @@
 """Claims of §IV-A "Mesh Input Data" (Fig 3, bunny res4), Fig 7 and the fitting protocol."""
 from dgmm.report import paper
-from dgmm.report.claims.rules import (FIG3_INPUTS, FIG3_MODEL, GAP_RULE, OFTEN_RULE, REPRODUCED,
-                                      ROBUST_NATS, SAME_NATS, SHARE_RULE, VARIANT_NAMES, VARIANTS, Claim, Grade, missing, best,
-                                      cells, gap_verdict, init_gaps, is_mesh, lost, mean, median, often_verdict, pending, same,
+from dgmm.report.claims.rules import (FIG3_INPUTS, FIG3_MODEL, GAP_RULE, OFTEN_RULE, REPRODUCED, ROBUST_NATS, SAME_NATS,
+                                      SHARE_RULE, VARIANTS, VARIANT_NAMES, Claim, Grade, best, cells, gap_verdict,
+                                      init_gaps, is_mesh, lost, mean, median, missing, often_verdict, pending, same,
                                       sentence, share_verdict)
 
 POINTS3 = tuple(name for name in FIG3_INPUTS if not is_mesh(name))
@@ -95,8 +95,8 @@ def robust_to_init(data, section, title, inputs, paper_words):
 
 def mesh_handles_both_inits(data):
     """§IV-A: "The proposed methods handled random initialization and k-means initialization"."""
-    return robust_to_init(data, "Fig 3", "Mesh fits (exact, approx) handle random and k-means starts alike", FIG3_INPUTS,
-                   "≈ 0 nat apart")
+    return robust_to_init(data, "Fig 3", "Mesh fits (exact, approx) handle random and k-means starts alike",
+                          FIG3_INPUTS, "≈ 0 nat apart")
 
 
 def points_prefer_an_init(data):

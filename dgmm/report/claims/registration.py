@@ -2,8 +2,8 @@
 import numpy as np
 
 from dgmm.report import paper
-from dgmm.report.claims.rules import (MACHINE, REPRODUCED, SHARE_RULE, VARIANT_NAMES, VARIANTS, Claim, Grade, missing, lost,
-                                      mean, median, pending, ratio_verdict, same, share_verdict)
+from dgmm.report.claims.rules import (MACHINE, REPRODUCED, SHARE_RULE, VARIANTS, VARIANT_NAMES, Claim, Grade, lost,
+                                      mean, median, missing, pending, ratio_verdict, same, share_verdict)
 from dgmm.report.tables import FIG5_MESH
 
 FIG5_METHODS = ("mesh-kmeans", "mesh-random", "points-kmeans", "points-random", "icp", "cpd")
@@ -129,7 +129,8 @@ TRANSLATION_LIMIT = 1.1
 def all_within_model_size(data):
     """Fig 5 caption: "all reported methods have position error, on average, better than 1.1% of the model size"."""
     section, title = "Fig 5", f"Every method's mean translation error is below {TRANSLATION_LIMIT}% of the model size"
-    rule = f"{SHARE_RULE}; a comparison is one Fig 5 method: mean translation error < {TRANSLATION_LIMIT}% of the diagonal"
+    rule = (f"{SHARE_RULE}; a comparison is one Fig 5 method: mean translation error < {TRANSLATION_LIMIT}% of the "
+            "diagonal")
     grades = {}
     for variant in VARIANTS:
         errors = _errors(data, variant)
@@ -187,8 +188,8 @@ def cpd_matches_p2d_runtime(data):
         ratio = seconds["cpd"] / seconds["mesh-kmeans"]
         verdict = ratio_verdict(ratio, (0.5, 2.0), (0.25, 4.0))
         grades[variant] = Grade(verdict, f"CPD / P2D {ratio:.2g}", "" if verdict == REPRODUCED else
-                                f"CPD takes {seconds['cpd'] * 1000:.3g} ms a trial, P2D {seconds['mesh-kmeans'] * 1000:.3g}"
-                                " ms.")
+                                f"CPD takes {seconds['cpd'] * 1000:.3g} ms a trial, P2D "
+                                f"{seconds['mesh-kmeans'] * 1000:.3g} ms.")
     return Claim(section, title, rule, "; ".join(f"{VARIANT_NAMES[v]}: {g.ours}" for v, g in grades.items()) + ".",
                  grades, "≈ 1", machine_dependent=True)
 
@@ -209,14 +210,16 @@ def _same_result(data, section, title, a, b, paper_words):
     pairs = _optimiser_pairs(data.optimisers or [], a, b)
     if not pairs:
         return pending(section, title, rule, "optimisers.csv (config section `checks.optimisers`)", paper_words)
-    diffs = {t: (abs(float(x["rotation_error_deg"]) - float(y["rotation_error_deg"])),
-                 abs(float(x["translation_error_pct"]) - float(y["translation_error_pct"]))) for t, (x, y) in pairs.items()}
-    failed = [f"trial {t} Δ {r:.3f}° / {p:.3f}%" for t, (r, p) in diffs.items() if not (r <= SAME_DEG and p <= SAME_PCT)]
+    diffs = {t: tuple(abs(float(x[column]) - float(y[column]))
+                      for column in ("rotation_error_deg", "translation_error_pct")) for t, (x, y) in pairs.items()}
+    failed = [f"trial {t} Δ {r:.3f}° / {p:.3f}%" for t, (r, p) in diffs.items()
+              if not (r <= SAME_DEG and p <= SAME_PCT)]
     wins = len(diffs) - len(failed)
     worst = max(r for r, _ in diffs.values())
     return Claim(section, title, rule, f"{wins} of {len(diffs)} trials at the same pose, largest rotation difference "
                                        f"{worst:.3f}°.",
-                 same(Grade(share_verdict(wins, len(diffs)), f"{wins}/{len(diffs)}, Δ ≤ {worst:.2g}°", lost(failed))),
+                 same(Grade(share_verdict(wins, len(diffs)), f"{wins}/{len(diffs)}, Δ ≤ {worst:.2g}°",
+                            lost(failed))),
                  paper_words)
 
 

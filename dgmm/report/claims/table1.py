@@ -2,8 +2,8 @@
 import math
 
 from dgmm.report import paper
-from dgmm.report.claims.rules import (CLOSE_NATS, OFTEN_RULE, SHARE_RULE, VARIANT_NAMES, VARIANTS, Claim, Grade, missing, lost,
-                                      often_verdict, pending, share_verdict)
+from dgmm.report.claims.rules import (CLOSE_NATS, OFTEN_RULE, SHARE_RULE, VARIANTS, VARIANT_NAMES, Claim, Grade, lost,
+                                      missing, often_verdict, share_verdict)
 
 SIGNIFICANT_NATS = 0.5
 """A likelihood margin this large counts as significant (half a nat per evaluation point)."""

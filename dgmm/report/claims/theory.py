@@ -1,6 +1,6 @@
 """Claims of the paper's theory (§II-III, Fig 2, Conclusion): the product integral and its approximations."""
-from dgmm.report.claims.rules import (GAP_RULE, MACHINE, NOT, PARTLY, PENDING, REPRODUCED, SAME_NATS, CLOSE_NATS,
-                                      Claim, Grade, gap_verdict, mean, median, pending, ratio_verdict, same)
+from dgmm.report.claims.rules import (CLOSE_NATS, GAP_RULE, MACHINE, NOT, REPRODUCED, SAME_NATS, Claim, Grade,
+                                      gap_verdict, mean, median, pending, ratio_verdict, same)
 from dgmm.report.tables import FIG2_EXPRESSIONS, fig2_bars
 from dgmm.shared_responsibility import PER_POINT_MEASURE
 
