@@ -100,7 +100,7 @@ def test_random_points_prefer_random_starts_at_high_k():
 
 def convergence_row(name, variant, seed, iterations, ll25=7.0, ll100=7.0):
     return {"model": "bunny", "input": name, "variant": variant, "K": "25", "init": "kmeans", "seed": str(seed),
-            "eval_ll_25": str(ll25), "eval_ll_100": str(ll100), "bound_25": "8", "bound_100": "8",
+            "eval_ll_25": str(ll25), "eval_ll_final": str(ll100), "bound_25": "8", "bound_final": "8",
             "n_iter_within_0.1": str(iterations), "n_iter_within_0.01": str(iterations), "coverage_2sigma": "0.8",
             "effective_components": "0.9"}
 

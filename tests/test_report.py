@@ -245,7 +245,7 @@ def write_check_tables(tables):
     """The checks' tables (dgmm.checks), a row or two each."""
     write_csv(tables / "convergence.csv", [
         {"model": "bunny", "input": name, "variant": variant, "K": 100, "init": "kmeans", "seed": 0,
-         "eval_ll_25": 7.0, "eval_ll_100": 7.1, "bound_25": 8.0, "bound_100": 8.1, "n_iter_within_0.1": n,
+         "eval_ll_25": 7.0, "eval_ll_final": 7.1, "bound_25": 8.0, "bound_final": 8.1, "n_iter_within_0.1": n,
          "n_iter_within_0.01": n, "coverage_2sigma": coverage, "effective_components": 0.9}
         for name, variant, n, coverage in (("res4-exact", "textbook", 10, 0.8), ("res4-exact", "authors", 5, 0.7),
                                            ("res4-centroids", "textbook", 30, 0.5))])

@@ -2,9 +2,10 @@
 
 The paper's Discussion: "When 100 iterations were used, the point-based methods performed better (nearly as good
 as our proposed method). However, our method often converged in about 1/3 the number of iterations". Every fit
-here runs ``max_iter`` (100) EM iterations from the seed the fitting sweep gives the same (input, variant, K,
-init, seed), so its state after ``snapshot`` (25) iterations is the sweep's fit. A row records the evaluation
-log-likelihood at both, how many iterations the bound took to come within ``CONVERGED_NATS`` of its final value,
+here runs ``max_iter`` (config: 100) EM iterations from the seed the fitting sweep gives the same (input, variant,
+K, init, seed), so its state after ``SNAPSHOT`` (25) iterations is the sweep's fit. A row records the evaluation
+log-likelihood at both (``eval_ll_25``, ``eval_ll_final``), how many iterations the bound took to come within each
+of ``CONVERGED_NATS`` of its final value,
 and two "fuller model" numbers of the 25-iteration mixture (Fig 7): the share of the evaluation points inside at
 least one component's 2σ ellipsoid, and the effective number of components ``exp(entropy of the weights)`` over K.
 """
@@ -13,11 +14,13 @@ import numpy as np
 from dgmm.mixture import GaussianMixture
 from dgmm.sweep import job_seed
 
+SNAPSHOT = 25
+"""The paper's iterations: the state the fitting sweep scores."""
 CONVERGED_NATS = (0.1, 0.01)
 """A fit has converged at the first iteration whose bound is within this of its bound after ``max_iter``."""
 COVERAGE_SIGMA = 2.0
 """Radius (in standard deviations, Mahalanobis) of the ellipsoids whose union is the covered surface."""
-COLUMNS = ("model", "input", "variant", "K", "init", "seed", "eval_ll_25", "eval_ll_100", "bound_25", "bound_100",
+COLUMNS = ("model", "input", "variant", "K", "init", "seed", "eval_ll_25", "eval_ll_final", "bound_25", "bound_final",
            "n_iter_within_0.1", "n_iter_within_0.01", "coverage_2sigma", "effective_components")
 
 
@@ -44,7 +47,7 @@ def effective_components(weights):
 
 
 def convergence_rows(prims, evaluation, *, model, input_name, variant, components, inits, seeds, root_seed,
-                     max_iter=100, snapshot=25, tol=1e-12, reg_covar=1e-6):
+                     max_iter=100, tol=1e-12, reg_covar=1e-6):
     """Fit every (K, init, seed) for ``max_iter`` iterations and measure it (module docstring).
 
     Parameters
@@ -58,6 +61,8 @@ def convergence_rows(prims, evaluation, *, model, input_name, variant, component
     components, inits : sequence
     seeds : int
         Seeds per (K, init): the sweep's first ``seeds``.
+    max_iter : int
+        Iterations of every fit (at least ``SNAPSHOT``); ``tol`` and ``reg_covar`` as the sweep's.
 
     Returns
     -------
@@ -72,7 +77,7 @@ def convergence_rows(prims, evaluation, *, model, input_name, variant, component
                 state = {}
 
                 def keep(iteration, fitted, state=state):
-                    if iteration == snapshot:
+                    if iteration == SNAPSHOT:
                         state["mixture"] = GaussianMixture.from_parameters(
                             fitted.weights_.copy(), fitted.means_.copy(), fitted.covariances_.copy())
 
@@ -83,8 +88,8 @@ def convergence_rows(prims, evaluation, *, model, input_name, variant, component
                 history = fitted.history_
                 rows.append({
                     "model": model, "input": input_name, "variant": variant, "K": k, "init": init, "seed": index,
-                    "eval_ll_25": early.score(evaluation), "eval_ll_100": fitted.score(evaluation),
-                    "bound_25": history[min(snapshot, len(history)) - 1], "bound_100": history[-1],
+                    "eval_ll_25": early.score(evaluation), "eval_ll_final": fitted.score(evaluation),
+                    "bound_25": history[min(SNAPSHOT, len(history)) - 1], "bound_final": history[-1],
                     **{f"n_iter_within_{nats:g}": iterations_to_converge(history, nats) for nats in CONVERGED_NATS},
                     "coverage_2sigma": coverage(early, evaluation),
                     "effective_components": effective_components(early.weights_)})

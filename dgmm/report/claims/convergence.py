@@ -72,7 +72,7 @@ def points_better_with_100(data):
     rows = [row for row in data.convergence or [] if row["input"].endswith(("-centroids", "-vertices", "-points"))]
     if not rows:
         return pending(section, title, rule, WHAT, "better")
-    gains = [float(row["eval_ll_100"]) - float(row["eval_ll_25"]) for row in rows]
+    gains = [float(row["eval_ll_final"]) - float(row["eval_ll_25"]) for row in rows]
     failed = [f"{row['input']} K={row['K']} {row['init']} seed {row['seed']} {gain:+.3f}"
               for row, gain in zip(rows, gains) if not gain > 0]
     wins = len(rows) - len(failed)
@@ -100,9 +100,9 @@ def points_nearly_match_at_100(data):
         groups = {}
         for (k, init, seed), fit in fits.items():
             group = groups.setdefault((k, init), {"exact": [], "points": {}})
-            group["exact"].append(float(fit["exact"]["eval_ll_100"]))
+            group["exact"].append(float(fit["exact"]["eval_ll_final"]))
             for row in fit["points"]:
-                group["points"].setdefault(row["input"], []).append(float(row["eval_ll_100"]))
+                group["points"].setdefault(row["input"], []).append(float(row["eval_ll_final"]))
         gaps = {key: mean(group["exact"]) - max(mean(values) for values in group["points"].values())
                 for key, group in groups.items()}
         failed = [f"K={k} {init} {gap:+.2f}" for (k, init), gap in gaps.items() if gap > CLOSE_NATS]
