@@ -1,0 +1,59 @@
+"""Write one API reference page per public package, listing the names of its ``__all__`` with autosummary.
+
+The pages are generated at every build (and git-ignored), so they follow the code: a name added to or removed from
+a package's ``__all__`` appears in or leaves the reference without editing the docs.
+"""
+import importlib
+import inspect
+
+# (module, page title, one-line summary); the odometry package and the modules it grew from share one page.
+PACKAGES = [
+    ("dgmm", "dgmm", "The estimator, the primitives it fits and the errors every entry point raises."),
+    ("dgmm.registration", "dgmm.registration", "Rigid registration with fitted mixtures (P2D, D2D), ICP and CPD."),
+    ("dgmm.recording", "dgmm.recording", "MCAP and rerun recordings of fits, registrations and odometry."),
+    ("dgmm.odometry", "dgmm.odometry", "Frame-to-frame visual odometry on TUM RGB-D sequences."),
+]
+# Modules documented beside the packages (whole-module pages): the tools the user guide names.
+MODULES = [
+    ("dgmm.coarse_to_fine", "Coarse-to-fine P2D registration."),
+    ("dgmm.shared_responsibility", "Fig 2's per-point responsibilities within triangles."),
+    ("dgmm.data", "The model registry: mesh files, their checksums and sources."),
+    ("dgmm.meshes", "Poisson-disk and Monte-Carlo sampling, quadric and clustering decimation (pymeshlab)."),
+    ("dgmm.model_io", "Saving and loading fitted mixtures (.npz)."),
+]
+
+
+def public_names(module):
+    """``module.__all__``, else the public classes and functions the module defines itself."""
+    names = getattr(module, "__all__", None)
+    if names is not None:
+        return sorted(names, key=str.lower)
+    return sorted((name for name, value in vars(module).items()
+                   if not name.startswith("_") and (inspect.isclass(value) or inspect.isfunction(value))
+                   and getattr(value, "__module__", None) == module.__name__), key=str.lower)
+
+
+def _package_page(name, title, summary):
+    module = importlib.import_module(name)
+    lines = [title, "=" * len(title), "", f".. automodule:: {name}", "   :no-members:", "", summary, "",
+             f".. currentmodule:: {name}", "", ".. autosummary::", "   :toctree: generated/", ""]
+    lines += [f"   {entry}" for entry in public_names(module)]
+    return "\n".join(lines) + "\n"
+
+
+def _modules_page():
+    title = "Other modules"
+    lines = [title, "=" * len(title), "", "Modules the user guide refers to by name.", "",
+             ".. autosummary::", "   :toctree: generated/", ""]
+    lines += [f"   {name}" for name, _ in MODULES]
+    return "\n".join(lines) + "\n"
+
+
+def write_api_pages(folder):
+    """Write ``<package>.rst`` for every package of :data:`PACKAGES` and ``modules.rst`` into ``folder``."""
+    pages = {f"{name}.rst": _package_page(name, title, summary) for name, title, summary in PACKAGES}
+    pages["modules.rst"] = _modules_page()
+    for filename, text in pages.items():
+        path = folder / filename
+        if not path.exists() or path.read_text() != text:  # unchanged pages keep their time: no rebuild
+            path.write_text(text)
