@@ -68,22 +68,27 @@ def _inline(value):
 
 
 def schema_rst(schema, config):
-    """reStructuredText lines for every key of ``schema``, with its value in ``config``: a definition per key, a
-    rubric (with the label ``config-<section>``) before each top-level section."""
+    """reStructuredText lines for every key of ``schema``, with its value in ``config``: a rubric (labelled
+    ``config-<section>``) and a paragraph for each top-level section, a definition for every other key."""
     lines = []
     for path, sub, required in _keys(schema, required=schema.get("required", ())):
         dotted = ".".join(path)
-        if len(path) == 1 and "properties" in sub:
-            lines += [f".. _config-{dotted}:", "", f".. rubric:: {dotted}", ""]
         description = sub.get("description", "").strip()
-        facts = "; ".join([f"*{_type(sub)}*" + (", required" if required else ""), *_constraints(sub)])
-        body = [description[0].upper() + description[1:] + "." if description else "", facts + "."]
+        facts = "; ".join([_type(sub) + (", required" if required else ""), *_constraints(sub)])
+        body = [description[0].upper() + description[1:] + "." if description else "",
+                facts[0].upper() + facts[1:] + "."]
         if "default" in sub and sub["default"] != {}:
             body.append(f"Default: {_inline(sub['default'])}.")
         value = _lookup(config, path)
-        if value is not None and not isinstance(value, dict):
+        if isinstance(value, dict) and "properties" not in sub:  # user-named entries: list their names
+            body.append("In ``config.yaml``: " + ", ".join(f"``{name}``" for name in value) + ".")
+        elif value is not None and not isinstance(value, dict):
             body.append(f"In ``config.yaml``: {_inline(value)}.")
-        lines += [f"``{dotted}``", *(f"   {entry}" for entry in body if entry), ""]
+        body = [entry for entry in body if entry]
+        if len(path) == 1 and "properties" in sub:
+            lines += [f".. _config-{dotted}:", "", f".. rubric:: {dotted}", "", *body, ""]
+        else:
+            lines += [f"``{dotted}``", *(f"   {entry}" for entry in body), ""]
     return lines
 
 

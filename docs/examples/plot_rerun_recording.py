@@ -7,7 +7,7 @@ every EM iteration and the bound, on the ``iteration`` timeline, with a blueprin
 beside the bound. ``rerun fit.rrd`` (or ``dgmm view fit.rrd``) replays it; without a screen, rerun's own chunk
 reader reads it back, as here.
 
-.. image:: ../../recordings/fit.png
+.. image:: /recordings/fit.png
    :alt: fit.rrd of the quick start in the rerun viewer
 
 *The quick start's* ``fit.rrd`` *in the rerun viewer (a screenshot; see* :doc:`/user_guide/recordings` *).*
