@@ -73,7 +73,7 @@ def schema_rst(schema, config):
     lines = []
     for path, sub, required in _keys(schema, required=schema.get("required", ())):
         dotted = ".".join(path)
-        description = sub.get("description", "").strip()
+        description = " ".join(sub.get("description", "").split()).replace("*", r"\*").replace("|", r"\|")
         facts = "; ".join([_type(sub) + (", required" if required else ""), *_constraints(sub)])
         body = [description[0].upper() + description[1:] + "." if description else "",
                 facts[0].upper() + facts[1:] + "."]
