@@ -25,7 +25,7 @@ check: $(STAMP)
 	$(VENV)/bin/python -m pytest -q -m "not slow"
 
 docs: $(STAMP)  # the documentation site into docs/_build/html (runs the gallery's examples); warnings are errors
-	$(VENV)/bin/sphinx-build -W --keep-going -b html docs docs/_build/html
+	OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 MKL_NUM_THREADS=1 $(VENV)/bin/sphinx-build -W --keep-going -b html docs docs/_build/html
 
 bench: $(STAMP)
 	$(VENV)/bin/python benchmarks/em_speed.py

@@ -5,6 +5,7 @@ Links are checked on the built HTML by parsing it here (every relative ``href`` 
 site and, with a ``#fragment``, an ``id`` in that file), not by trusting Sphinx's own reference resolution.
 """
 import importlib
+import os
 import re
 import subprocess
 import sys
@@ -22,6 +23,7 @@ sys.path.insert(0, str(DOCS / "_ext"))
 from api_pages import PACKAGES, public_names  # noqa: E402
 
 SPHINX_BUILD = str(Path(sys.executable).parent / "sphinx-build")
+ONE_THREAD = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}  # as make docs
 MARKDOWN_LINK = re.compile(r"\[[^\]]*\]\(([^)\s]+)\)")
 
 
@@ -76,7 +78,7 @@ def site(tmp_path_factory):
     start = time.perf_counter()
     result = subprocess.run([SPHINX_BUILD, "-W", "--keep-going", "-q", "-b", "html", "-d", str(out / "doctrees"),
                              "-D", "sphinx_gallery_conf.run_stale_examples=1", str(DOCS), str(out / "html")],
-                            capture_output=True, text=True, cwd=REPO, timeout=600)
+                            capture_output=True, text=True, cwd=REPO, timeout=600, env=os.environ | ONE_THREAD)
     assert result.returncode == 0, result.stderr[-5000:]
     print(f"docs built in {time.perf_counter() - start:.0f} s")
     return out / "html"

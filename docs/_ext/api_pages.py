@@ -6,7 +6,7 @@ a package's ``__all__`` appears in or leaves the reference without editing the d
 import importlib
 import inspect
 
-# (module, page title, one-line summary); the odometry package and the modules it grew from share one page.
+# (package, page title, one-line summary).
 PACKAGES = [
     ("dgmm", "dgmm", "The estimator, the primitives it fits and the errors every entry point raises."),
     ("dgmm.registration", "dgmm.registration", "Rigid registration with fitted mixtures (P2D, D2D), ICP and CPD."),
@@ -20,6 +20,8 @@ MODULES = [
     ("dgmm.data", "The model registry: mesh files, their checksums and sources."),
     ("dgmm.meshes", "Poisson-disk and Monte-Carlo sampling, quadric and clustering decimation (pymeshlab)."),
     ("dgmm.model_io", "Saving and loading fitted mixtures (.npz)."),
+    ("dgmm.odometry.synthetic", "The synthetic TUM-format room sequence (imported on its own: trimesh)."),
+    ("dgmm.odometry.figure", "Fig 6, the top-down trajectories (imported on its own: matplotlib)."),
 ]
 
 
