@@ -6,22 +6,17 @@ a package's ``__all__`` appears in or leaves the reference without editing the d
 import importlib
 import inspect
 
-# (package, page title, one-line summary).
-PACKAGES = [
-    ("dgmm", "dgmm", "The estimator, the primitives it fits and the errors every entry point raises."),
-    ("dgmm.registration", "dgmm.registration", "Rigid registration with fitted mixtures (P2D, D2D), ICP and CPD."),
-    ("dgmm.recording", "dgmm.recording", "MCAP and rerun recordings of fits, registrations and odometry."),
-    ("dgmm.odometry", "dgmm.odometry", "Frame-to-frame visual odometry on TUM RGB-D sequences."),
-]
+# The public packages, each a page: its docstring, then a table of its names linking to one page per name.
+PACKAGES = ["dgmm", "dgmm.registration", "dgmm.recording", "dgmm.odometry"]
 # Modules documented beside the packages (whole-module pages): the tools the user guide names.
 MODULES = [
-    ("dgmm.coarse_to_fine", "Coarse-to-fine P2D registration."),
-    ("dgmm.shared_responsibility", "Fig 2's per-point responsibilities within triangles."),
-    ("dgmm.data", "The model registry: mesh files, their checksums and sources."),
-    ("dgmm.meshes", "Poisson-disk and Monte-Carlo sampling, quadric and clustering decimation (pymeshlab)."),
-    ("dgmm.model_io", "Saving and loading fitted mixtures (.npz)."),
-    ("dgmm.odometry.synthetic", "The synthetic TUM-format room sequence (imported on its own: trimesh)."),
-    ("dgmm.odometry.figure", "Fig 6, the top-down trajectories (imported on its own: matplotlib)."),
+    "dgmm.coarse_to_fine",  # Coarse-to-fine P2D registration.
+    "dgmm.shared_responsibility",  # Fig 2's per-point responsibilities within triangles.
+    "dgmm.data",  # The model registry: mesh files, their checksums and sources.
+    "dgmm.meshes",  # Poisson-disk and Monte-Carlo sampling, quadric and clustering decimation (pymeshlab).
+    "dgmm.model_io",  # Saving and loading fitted mixtures (.npz).
+    "dgmm.odometry.synthetic",  # The synthetic TUM-format room sequence (imported on its own: trimesh).
+    "dgmm.odometry.figure",  # Fig 6, the top-down trajectories (imported on its own: matplotlib).
 ]
 
 
@@ -35,9 +30,9 @@ def public_names(module):
                    and getattr(value, "__module__", None) == module.__name__), key=str.lower)
 
 
-def _package_page(name, title, summary):
+def _package_page(name):
     module = importlib.import_module(name)
-    lines = [title, "=" * len(title), "", f".. automodule:: {name}", "   :no-members:", "", summary, "",
+    lines = [name, "=" * len(name), "", f".. automodule:: {name}", "   :no-members:", "",
              f".. currentmodule:: {name}", "", ".. autosummary::", "   :toctree: generated/", ""]
     lines += [f"   {entry}" for entry in public_names(module)]
     return "\n".join(lines) + "\n"
@@ -47,13 +42,13 @@ def _modules_page():
     title = "Other modules"
     lines = [title, "=" * len(title), "", "Modules the user guide refers to by name.", "",
              ".. autosummary::", "   :toctree: generated/", ""]
-    lines += [f"   {name}" for name, _ in MODULES]
+    lines += [f"   {name}" for name in MODULES]
     return "\n".join(lines) + "\n"
 
 
 def write_api_pages(folder):
     """Write ``<package>.rst`` for every package of :data:`PACKAGES` and ``modules.rst`` into ``folder``."""
-    pages = {f"{name}.rst": _package_page(name, title, summary) for name, title, summary in PACKAGES}
+    pages = {f"{name}.rst": _package_page(name) for name in PACKAGES}
     pages["modules.rst"] = _modules_page()
     for filename, text in pages.items():
         path = folder / filename
