@@ -126,3 +126,40 @@ def test_readme_and_docs_sources_link_to_files_that_exist():
 
 def test_readme_is_a_front_page():
     assert len((REPO / "README.md").read_bytes()) <= 10_500
+
+
+def test_link_check_finds_missing_files_and_anchors(tmp_path):
+    """The checker itself, on a two-page site with one good link, one to a missing page and one to a missing
+    anchor (a checker that finds nothing would pass the site test)."""
+    (tmp_path / "sub").mkdir()
+    (tmp_path / "index.html").write_text('<a href="sub/page.html#here">ok</a> <a href="gone.html">x</a>'
+                                         '<img src="sub/page.html"> <a href="https://example.org/x.html">ext</a>')
+    (tmp_path / "sub" / "page.html").write_text('<h1 id="here">t</h1><a href="../index.html#nowhere">y</a>'
+                                                '<a href="#here">z</a>')
+    assert sorted(broken_links(tmp_path)) == ["index.html: gone.html",
+                                              "sub/page.html: ../index.html#nowhere (no such anchor)"]
+
+
+def test_configuration_page_documents_every_key():
+    """Every key of the schema has a description (the configuration page is generated from them), and every key
+    of config.yaml and tests/config.yaml is on the page."""
+    import yaml
+    from config_schema import _keys, schema_rst
+
+    schema = yaml.safe_load((REPO / "workflow/schemas/config.schema.yaml").read_text())
+    undescribed = [".".join(path) for path, sub, _ in _keys(schema) if not sub.get("description")]
+    assert undescribed == [], "add a description to these keys of config.schema.yaml"
+    page = "\n".join(schema_rst(schema, {}))
+
+    def keys(config, path=()):
+        for name, value in config.items():
+            named = path and path[-1] == "experiments"  # user-named entries: documented as <name>
+            dotted = path + ("<name>",) if named else path + (name,)
+            if not named:
+                yield ".".join(dotted)
+            if isinstance(value, dict):
+                yield from keys(value, dotted)
+
+    for config in ("config.yaml", "tests/config.yaml"):
+        for key in keys(yaml.safe_load((REPO / config).read_text())):
+            assert f"``{key}``" in page or f"rubric:: {key}" in page, f"{config}: {key} is not on the page"
