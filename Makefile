@@ -24,14 +24,15 @@ test: $(STAMP)
 check: $(STAMP)
 	$(VENV)/bin/python -m pytest -q -m "not slow"
 
-docs: $(STAMP)  # the documentation site into docs/_build/html (runs the gallery's examples); warnings are errors
-	OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 MKL_NUM_THREADS=1 $(VENV)/bin/sphinx-build -W --keep-going -b html docs docs/_build/html
+docs: $(STAMP)  # the site into docs/_build/html, running the gallery's examples on one thread; warnings are errors
+	OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 MKL_NUM_THREADS=1 \
+	$(VENV)/bin/sphinx-build -W --keep-going -b html docs docs/_build/html
 
 bench: $(STAMP)
 	$(VENV)/bin/python benchmarks/em_speed.py
 	$(VENV)/bin/python benchmarks/registration_speed.py
 
-profile: $(STAMP)  # cold sweep of a clone of HEAD in sweep units, per-rule job times (README "Sweep profile")
+profile: $(STAMP)  # cold sweep of a clone of HEAD in sweep units, per-rule job times (docs/benchmarks.md)
 	$(VENV)/bin/python benchmarks/sweep_profile.py --cores $(CORES)
 
 clean:

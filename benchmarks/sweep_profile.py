@@ -14,8 +14,8 @@ so that runs on machines of different speed compare. Steps:
    for the rules that time their own computation, the job's timing table (the seconds a fit's seeds, a chunk's
    trials or an odometry run's frames took): overhead = job wall time - computation.
 
-Usage: ``python benchmarks/sweep_profile.py [--cores 2] [--keep]`` (``make profile``); it prints the README's
-"Sweep profile" section, ready to paste.
+Usage: ``python benchmarks/sweep_profile.py [--cores 2] [--keep]`` (``make profile``); it prints the "Sweep profile"
+section of docs/benchmarks.md, ready to paste.
 """
 import argparse
 import csv

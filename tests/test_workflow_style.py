@@ -1,5 +1,6 @@
 """The rule files as Snakemake's catalogue expects: `snakemake --lint` asks for nothing but a conda environment or
-container per rule (answered in the README: software is deployed by pip into .venv), `snakefmt --check` passes."""
+container per rule (answered in docs/user_guide/workflow.md: software is deployed by pip into .venv), `snakefmt --check`
+passes."""
 import re
 import subprocess
 import sys
