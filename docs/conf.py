@@ -26,11 +26,10 @@ extensions = [
 
 source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
 # docs/notes/ holds the engineers' notes that the benchmarks page is assembled from; they are not pages.
-exclude_patterns = ["_build", "notes", "examples", "auto_examples/*.ipynb", "auto_examples/*.py",
-                    "auto_examples/*.zip", "auto_examples/*.md5", "auto_examples/*.codeobj.json"]
+# docs/examples/ holds the gallery's sources; sphinx-gallery turns them into the pages of auto_examples/.
+exclude_patterns = ["_build", "notes", "examples"]
 templates_path = ["_templates"]
 myst_heading_anchors = 3
-myst_enable_extensions = ["dollarmath"]
 
 # API reference: one page per public package, its names read from the package's __all__ at build time.
 write_api_pages(DOCS / "api")
@@ -49,15 +48,11 @@ sphinx_gallery_conf = {
     "download_all_examples": False,
     "remove_config_comments": True,
     "within_subsection_order": "FileNameSortKey",
-    "matplotlib_animations": False,
-    "image_scrapers": ("matplotlib",),
     "reset_modules": ("matplotlib",),
-    "show_memory": False,
 }
 
 html_theme = "pydata_sphinx_theme"
 html_title = "dgmm"
-html_static_path = []
 html_theme_options = {
     "navigation_with_keys": False,
     "show_toc_level": 2,
