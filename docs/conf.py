@@ -6,7 +6,7 @@ DOCS = Path(__file__).resolve().parent
 sys.path.insert(0, str(DOCS / "_ext"))
 
 import dgmm  # noqa: E402  (installed in the project's .venv)
-from api_pages import write_api_pages  # noqa: E402
+from api_pages import constant_docstring, write_api_pages  # noqa: E402
 
 project = "dgmm"
 author = "the dgmm developers"
@@ -59,3 +59,7 @@ html_theme_options = {
     "header_links_before_dropdown": 8,
 }
 html_show_sourcelink = False
+
+
+def setup(app):
+    app.connect("autodoc-process-docstring", constant_docstring)

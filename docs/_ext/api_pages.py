@@ -5,6 +5,9 @@ a package's ``__all__`` appears in or leaves the reference without editing the d
 """
 import importlib
 import inspect
+import pkgutil
+
+from sphinx.pycode import ModuleAnalyzer
 
 # The public packages, each a page: its docstring, then a table of its names linking to one page per name.
 PACKAGES = ["dgmm", "dgmm.registration", "dgmm.recording", "dgmm.odometry"]
@@ -54,3 +57,18 @@ def write_api_pages(folder):
         path = folder / filename
         if not path.exists() or path.read_text() != text:  # unchanged pages keep their time: no rebuild
             path.write_text(text)
+
+
+def constant_docstring(app, what, name, obj, options, lines):
+    """``autodoc-process-docstring``: a constant a package re-exports gets the docstring written under its assignment
+    in the submodule that defines it, not the docstring of its type (``tuple``'s "Built-in immutable sequence")."""
+    if what != "data" or inspect.getdoc(obj) != inspect.getdoc(type(obj)):
+        return
+    package_name, _, attribute = name.rpartition(".")
+    package = importlib.import_module(package_name)
+    for info in pkgutil.iter_modules(getattr(package, "__path__", [])):
+        docs = ModuleAnalyzer.for_module(f"{package_name}.{info.name}").find_attr_docs()
+        if ("", attribute) in docs:
+            lines[:] = list(docs[("", attribute)])
+            return
+    lines.clear()
