@@ -7,6 +7,7 @@ import pytest
 import trimesh
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from scipy.special import logsumexp
 from scipy.stats import multivariate_normal
 from sklearn.base import clone
 from sklearn.mixture import GaussianMixture as SklearnGaussianMixture
@@ -120,6 +121,63 @@ def test_authors_variant_equals_textbook_where_sizes_are_equal():
         authors = GaussianMixture(6, random_state=0, variant="authors").fit(data)
         np.testing.assert_allclose(authors.means_, textbook.means_, rtol=1e-10, atol=1e-12)
         np.testing.assert_allclose(authors.history_, textbook.history_, rtol=1e-10)
+
+
+def authors_em(centroids, triangle_covariances, areas, weights, means, covariances, n_iter, reg_covar):
+    """The authors' EM (leonidk/direct_gmm's modified scikit-learn 0.20), written from their description:
+    each triangle's Mahalanobis-plus-trace term is multiplied by ``area / min(area)`` in the E-step; the M-step
+    counts every triangle once (responsibility-weighted centroids, weights ``N_k / n``) and keeps the triangles'
+    covariances. Plain loops over components, scipy for the Gaussian. Returns (weights, means, covariances,
+    bounds), a bound (mean of log-sum-exp over triangles) after each iteration."""
+    scale = areas / areas.min()
+    bounds = []
+    for _ in range(n_iter):
+        log_rho = np.empty((len(centroids), len(weights)))
+        for k, (weight, mean, covariance) in enumerate(zip(weights, means, covariances)):
+            precision = np.linalg.inv(covariance)
+            offsets = centroids - mean
+            quadratic = np.einsum("pi,ij,pj->p", offsets, precision, offsets)
+            trace = np.einsum("ij,pji->p", precision, triangle_covariances)
+            log_det = np.linalg.slogdet(covariance)[1]
+            log_rho[:, k] = np.log(weight) - 0.5 * (3 * np.log(2 * np.pi) + log_det + scale * (quadratic + trace))
+        resp = np.exp(log_rho - logsumexp(log_rho, axis=1, keepdims=True))
+        counts = resp.sum(axis=0) + 10 * np.finfo(float).eps
+        weights = counts / len(centroids)
+        means = resp.T @ centroids / counts[:, None]
+        covariances = np.stack([
+            (resp[:, k, None, None] * (np.einsum("pi,pj->pij", centroids - means[k], centroids - means[k])
+                                       + triangle_covariances)).sum(axis=0) / counts[k] + reg_covar * np.eye(3)
+            for k in range(len(weights))])
+        bounds.append(logsumexp(log_rho, axis=1).mean())
+    return weights, means, covariances, bounds
+
+
+def test_authors_variant_equals_an_independent_implementation_on_unequal_triangles(bunny_res4):
+    """bunny_res4's areas differ by a factor above 20, so the E-step scale matters. From the same start (random
+    parameters given to both), 8 iterations agree to rounding. Tried wrong implementations move the component
+    weights by: E-step scale over the mean area (the authors' earlier code) 70%, an area-weighted M-step 9%,
+    textbook EM 45%, an unscaled E-step 49%; the tolerances (1e-9 relative) fail all of them."""
+    triangles = bunny_res4.vertices[bunny_res4.faces]
+    centroids, areas = triangles.mean(axis=1), bunny_res4.area_faces
+    assert areas.max() / areas.min() > 20
+    offsets = triangles - centroids[:, None]
+    triangle_covariances = np.einsum("pvi,pvj->pij", offsets, offsets) / 12  # (A Aᵀ + B Bᵀ + C Cᵀ − 3 m mᵀ) / 12
+    rng = np.random.default_rng(11)
+    k, n_iter, reg_covar = 6, 8, 1e-6
+    start_weights = rng.dirichlet(np.ones(k))
+    start_means = centroids[rng.choice(len(centroids), k, replace=False)]
+    start_covariances = np.tile(np.cov(centroids.T), (k, 1, 1))
+    init = dict(weights_init=start_weights, means_init=start_means,
+                precisions_init=np.linalg.inv(start_covariances))
+    ours = GaussianMixture(k, variant="authors", max_iter=n_iter, tol=0, reg_covar=reg_covar, **init).fit(bunny_res4)
+    weights, means, covariances, bounds = authors_em(centroids, triangle_covariances, areas, start_weights,
+                                                     start_means, start_covariances, n_iter, reg_covar)
+    size = np.abs(centroids).max()
+    np.testing.assert_allclose(ours.weights_, weights, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(ours.means_, means, rtol=0, atol=1e-9 * size)
+    np.testing.assert_allclose(ours.covariances_, covariances, rtol=0, atol=1e-9 * np.abs(covariances).max())
+    # Our bound after iteration t is that of the parameters of M-step t: the reference's next E-step.
+    np.testing.assert_allclose(ours.history_[:-1], bounds[1:], rtol=1e-10)
 
 
 def test_exact_mesh_fit_beats_vertex_fit_on_bunny_res4(bunny_res4):
