@@ -16,9 +16,9 @@ from pathlib import Path
 from threadpoolctl import threadpool_limits
 
 from dgmm.odometry import run_odometry
-from dgmm.pixels import CAMERAS, sequence_intrinsics
-from dgmm.trajectory_metrics import absolute_trajectory_error, relative_pose_error
-from dgmm.tum import read_sequence
+from dgmm.odometry.pixels import CAMERAS, sequence_intrinsics
+from dgmm.odometry.metrics import absolute_trajectory_error, relative_pose_error
+from dgmm.odometry.tum import read_sequence
 
 FR1_XYZ = Path(__file__).resolve().parents[2] / "shared" / "data" / "tum" / "rgbd_dataset_freiburg1_xyz"
 

@@ -385,10 +385,10 @@ def _odometry(args):
     import tempfile
 
     from dgmm.odometry import first_frames, run_odometry
-    from dgmm.pixels import parse_intrinsics, sequence_intrinsics
+    from dgmm.odometry.pixels import parse_intrinsics, sequence_intrinsics
     from dgmm.recording import OdometryRecorder
-    from dgmm.trajectory_metrics import drift_metrics
-    from dgmm.tum import read_sequence, write_trajectory
+    from dgmm.odometry.metrics import drift_metrics
+    from dgmm.odometry.tum import read_sequence, write_trajectory
 
     sequence = read_sequence(args.sequence)
     name = args.sequence.resolve().name

@@ -25,7 +25,7 @@ from dgmm.data import load_mesh, save_ply
 from dgmm.model_io import load_model, save_model
 from dgmm.odometry import run_odometry
 from dgmm.registration import kabsch, random_trials, register_cpd, register_d2d, register_icp, register_p2d
-from dgmm.tum import read_sequence
+from dgmm.odometry.tum import read_sequence
 
 from conftest import SHARED_DATA
 from tests.test_odometry_cli import small_sequence

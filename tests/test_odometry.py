@@ -12,11 +12,11 @@ from threadpoolctl import threadpool_limits
 
 from dgmm.errors import DataError
 from dgmm.odometry import run_odometry
-from dgmm.pixels import FR3, backproject, pixel_primitives
-from dgmm.trajectory_metrics import absolute_trajectory_error
-from dgmm.tum import (DEPTH_SCALE, Trajectory, associate, read_depth, read_sequence, read_trajectory, write_depth,
+from dgmm.odometry.pixels import FR3, backproject, pixel_primitives
+from dgmm.odometry.metrics import absolute_trajectory_error
+from dgmm.odometry.tum import (DEPTH_SCALE, Trajectory, associate, read_depth, read_sequence, read_trajectory, write_depth,
                       write_trajectory)
-from dgmm.synthetic import _nearest_hits, handheld_trajectory, room_scene, write_synthetic_sequence
+from dgmm.odometry.synthetic import _nearest_hits, handheld_trajectory, room_scene, write_synthetic_sequence
 from tests.test_odometry_metrics import FR1_XYZ, needs_fr1
 
 N_FRAMES = 16
@@ -255,7 +255,7 @@ def test_warm_start_restarts_starved_components():
     1/K); live components keep their parameters and the weights still sum to 1."""
     from types import SimpleNamespace
 
-    from dgmm.odometry import _warm_start
+    from dgmm.odometry.frame_model import _warm_start
     from dgmm.primitives import Primitives
 
     covariances = np.stack([np.diag([1.0, 2.0, 3.0]), np.diag([2.0, 2.0, 2.0]), np.diag([1e-6, 1e-6, 1e-6])])
@@ -283,7 +283,7 @@ def test_gmm_pixels_d2d_holds_under_pure_rotation(axis):
     baseline) is measured beside it and must do no better.
     """
     from dgmm.mixture import GaussianMixture
-    from dgmm.pixels import CAMERAS
+    from dgmm.odometry.pixels import CAMERAS
     from dgmm.primitives import Primitives
     from dgmm.registration import register_d2d, register_icp
 

@@ -10,9 +10,9 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from dgmm.errors import InputError
-from dgmm.pixels import CAMERAS, parse_intrinsics, sequence_intrinsics
-from dgmm.trajectory_metrics import absolute_trajectory_error, relative_pose_error
-from dgmm.tum import Trajectory, read_sequence, read_trajectory, write_trajectory
+from dgmm.odometry.pixels import CAMERAS, parse_intrinsics, sequence_intrinsics
+from dgmm.odometry.metrics import absolute_trajectory_error, relative_pose_error
+from dgmm.odometry.tum import Trajectory, read_sequence, read_trajectory, write_trajectory
 
 FR1_XYZ = Path(__file__).resolve().parents[2] / "shared" / "data" / "tum" / "rgbd_dataset_freiburg1_xyz"
 needs_fr1 = pytest.mark.skipif(not (FR1_XYZ / "groundtruth.txt").is_file(), reason=f"{FR1_XYZ} is not mirrored")

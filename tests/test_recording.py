@@ -37,7 +37,7 @@ from dgmm.recording import (
     poses_in_frame,
 )
 from dgmm.registration import Registration, RigidTrial, register_p2d
-from dgmm.tum import Trajectory
+from dgmm.odometry.tum import Trajectory
 
 RERUN_CLI = str(Path(sys.executable).parent / "rerun")  # installed with rerun-sdk beside the interpreter
 

@@ -8,7 +8,7 @@ from snakemake.utils import validate
 
 from dgmm.data import REGISTRY
 from dgmm.odometry import odometry_runs
-from dgmm.pixels import sequence_intrinsics
+from dgmm.odometry.pixels import sequence_intrinsics
 from dgmm.report import figure_names
 from dgmm.sweep import parse_input, variants_for
 from dgmm.trials import METHODS, NO_VARIANT, PROTOCOLS, method_variants, mixture_source

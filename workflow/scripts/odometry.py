@@ -9,9 +9,9 @@ import sys
 from threadpoolctl import threadpool_limits
 
 from dgmm.odometry import first_frames, frame_seconds, run_odometry
-from dgmm.pixels import parse_intrinsics
-from dgmm.trajectory_metrics import drift_metrics
-from dgmm.tum import read_sequence, write_trajectory
+from dgmm.odometry.pixels import parse_intrinsics
+from dgmm.odometry.metrics import drift_metrics
+from dgmm.odometry.tum import read_sequence, write_trajectory
 from dgmm.recording import OdometryRecorder
 from dgmm.sweep import job_seed
 from dgmm.tables import write_csv

@@ -6,7 +6,7 @@ hand_over()  # in a sweep, the rest runs in a fork of the job server, its import
 import sys
 from pathlib import Path
 
-from dgmm.odometry_plot import fig6_from_files, save_png
+from dgmm.odometry.figure import fig6_from_files, save_png
 
 smk = snakemake  # noqa: F821 (injected by Snakemake)
 sys.stderr = open(smk.log[0], "w")

@@ -1,4 +1,4 @@
-"""Job: render the synthetic TUM-format sequence (dgmm.synthetic): the room with the configured data-stage meshes."""
+"""Job: render the synthetic TUM-format sequence (dgmm.odometry.synthetic): the room with the configured data-stage meshes."""
 from dgmm.job_server import hand_over
 
 hand_over()  # in a sweep, the rest runs in a fork of the job server, its imports already loaded
@@ -9,7 +9,7 @@ from threadpoolctl import threadpool_limits
 
 from dgmm.data import load_mesh
 from dgmm.sweep import job_seed
-from dgmm.synthetic import room_scene, write_synthetic_sequence
+from dgmm.odometry.synthetic import room_scene, write_synthetic_sequence
 
 smk = snakemake  # noqa: F821 (injected by Snakemake)
 sys.stderr = open(smk.log[0], "w")

@@ -10,7 +10,7 @@ import numpy as np
 
 from dgmm.errors import InputError
 from dgmm.registration import kabsch
-from dgmm.tum import MAX_TIME_DIFFERENCE, associate
+from dgmm.odometry.tum import MAX_TIME_DIFFERENCE, associate
 
 @dataclass(frozen=True)
 class TrajectoryError:

@@ -1,20 +1,10 @@
-"""Frame-to-frame visual odometry with Gaussian mixtures on TUM RGB-D sequences (paper §V "Visual Odometry").
+"""The frame-to-frame odometry loop over a TUM RGB-D sequence (paper §V "Visual Odometry"), and its timings.
 
-Files and poses follow ``dgmm.tum`` (camera → world, ``x_w = R x_c + t``), pixels ``dgmm.pixels``, the error
-metrics ``dgmm.trajectory_metrics``. Odometry registers frame ``k+1`` (moving) onto frame ``k`` (fixed); the
-transform returned maps camera ``k+1`` coordinates into camera ``k`` coordinates, i.e. the relative pose
-``T_k⁻¹ T_{k+1}``, and the poses are composed from the identity at the first frame. Registration starts from the
-identity, as in the paper.
-
-Methods (paper §V): ``"gmm-pixels"`` fits a K=100 GMM (25 EM iterations) to per-pixel rectangle primitives and
-registers with the determinant-free D2D cost; ``"gmm-points"`` does the same with the plain back-projected points;
-``"icp"`` runs point-to-point ICP on 2,500 points drawn at random from each frame's back-projection.
-
-EM start (``warm_iter``): the paper's protocol fits every frame from a k-means start (``max_iter`` iterations);
-with ``warm_iter`` set, every frame after the first starts from the previous frame's mixture (its starved
-components restarted on the data) and runs ``warm_iter`` iterations, several times cheaper since the camera moves
-little between frames, at a cost in drift (fr1/xyz, first 100 frames: ATE 0.037 m at 5 iterations against the
-protocol's 0.018 m).
+Files and poses follow :mod:`dgmm.odometry.tum` (camera → world, ``x_w = R x_c + t``), the frames' models and
+their registration :mod:`dgmm.odometry.frame_model`. Odometry registers frame ``k+1`` (moving) onto frame ``k``
+(fixed); the transform returned maps camera ``k+1`` coordinates into camera ``k`` coordinates, i.e. the relative
+pose ``T_k⁻¹ T_{k+1}``, and the poses are composed from the identity at the first frame. Registration starts from
+the identity, as in the paper.
 """
 from __future__ import annotations
 
@@ -24,99 +14,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from dgmm.errors import DataError, InputError
-from dgmm.mixture import GaussianMixture
-from dgmm.pixels import FR3, backproject, pixel_primitives
-from dgmm.primitives import Primitives
-from dgmm.registration import Registration, register_d2d, register_icp
-from dgmm.tum import MAX_TIME_DIFFERENCE, Trajectory
-
-
-# ---------------------------------------------------------------------------------------------- odometry
-STARVED_WEIGHT = 0.1
-"""Warm start: a component of the previous frame's mixture whose weight is below ``STARVED_WEIGHT / K`` restarts."""
-
-
-def _warm_start(mixture, prims, rng):
-    """The previous frame's mixture as this frame's EM start, every starved component (weight below
-    ``STARVED_WEIGHT / K``) restarted at a primitive drawn by size, with the live components' median covariance
-    and weight ``1 / K``.
-
-    Without the restart a component that loses its primitives (the scene leaves the view, or its neighbours win
-    them) keeps a weight near 0 and the ``reg_covar`` covariance for good: on fr1/xyz the effective number of
-    components ``1 / Σ π²`` falls from 79 to 7 within 55 frames and D2D loses its grip.
-    """
-    k = len(mixture.weights_)
-    weights, means, covariances = mixture.weights_.copy(), mixture.means_.copy(), mixture.covariances_.copy()
-    starved = weights < STARVED_WEIGHT / k
-    if starved.any():
-        picks = rng.choice(len(prims), size=int(starved.sum()), p=prims.weights / prims.weights.sum())
-        means[starved] = prims.means[picks]
-        covariances[starved] = np.median(covariances[~starved], axis=0)
-        weights[starved] = 1.0 / k
-        weights /= weights.sum()
-    return weights, means, np.linalg.inv(covariances)
-
-
-def _fit_mixture(prims, rng, previous, options):
-    """The frame's K-component GMM: from a k-means start seeded by ``rng``, or from ``previous`` (warm start).
-
-    ``previous`` is the previous frame's mixture or ``None`` (see :func:`_warm_start`).
-    """
-    common = dict(variant=options["variant"], random_state=rng)
-    if previous is None or options["warm_iter"] is None:
-        return GaussianMixture(options["n_components"], max_iter=options["max_iter"], **common).fit(prims)
-    weights, means, precisions = _warm_start(previous, prims, rng)
-    return GaussianMixture(options["n_components"], max_iter=options["warm_iter"], weights_init=weights,
-                           means_init=means, precisions_init=precisions, **common).fit(prims)
-
-
-def _prepare_pixels(depth, intrinsics, rng, previous, options):
-    return _fit_mixture(pixel_primitives(depth, intrinsics, size=options["size"]), rng, previous, options)
-
-
-def _prepare_points(depth, intrinsics, rng, previous, options):
-    return _fit_mixture(Primitives.from_points(backproject(depth, intrinsics)), rng, previous, options)
-
-
-def _prepare_icp(depth, intrinsics, rng, previous, options):
-    points = backproject(depth, intrinsics)
-    return points[rng.choice(len(points), size=min(options["n_icp_points"], len(points)), replace=False)]
-
-
-def _register_icp(fixed, moving):
-    return register_icp(moving, fixed)
-
-
-# method -> (prepare(depth, intrinsics, rng, previous model, options) -> frame model,
-#            register(fixed, moving) -> Registration)
-METHODS = {
-    "gmm-pixels": (_prepare_pixels, register_d2d),
-    "gmm-points": (_prepare_points, register_d2d),
-    "icp": (_prepare_icp, _register_icp),
-}
-
-
-MIXTURE_METHODS = ("gmm-pixels", "gmm-points")
-"""The methods that fit a GMM per frame, and so run with an EM ``variant``."""
-
-
-def odometry_runs(methods, variants):
-    """The (method, variant) pairs of a sweep, named as its jobs' folders.
-
-    Parameters
-    ----------
-    methods : sequence of str
-        Keys of ``METHODS``.
-    variants : sequence of str
-        EM variants of the mixture methods (ICP has none).
-
-    Returns
-    -------
-    runs : dict of str to (str, str)
-        ``"gmm-pixels-textbook" -> ("gmm-pixels", "textbook")`` …, ``"icp" -> ("icp", "")``, in the given order.
-    """
-    return {f"{method}-{variant}" if variant else method: (method, variant)
-            for method in methods for variant in (variants if method in MIXTURE_METHODS else [""])}
+from dgmm.odometry.frame_model import METHODS
+from dgmm.odometry.pixels import FR3
+from dgmm.odometry.tum import Trajectory
+from dgmm.registration import Registration
 
 
 @dataclass(frozen=True)
@@ -185,11 +86,11 @@ def run_odometry(sequence, method, frames=None, *, intrinsics=FR3, n_components=
 
     Parameters
     ----------
-    sequence : dgmm.tum.TumSequence
+    sequence : dgmm.odometry.tum.TumSequence
     method : {"gmm-pixels", "gmm-points", "icp"}
     frames : array-like of int, optional
         Frame indices to use, in order (e.g. ``range(300)``); all frames when omitted.
-    intrinsics : dgmm.pixels.Intrinsics, default=FR3
+    intrinsics : dgmm.odometry.pixels.Intrinsics, default=FR3
     n_components, max_iter : int
         GMM size and EM iterations from the k-means start (paper: K=100; 25 iterations).
     warm_iter : int, optional
@@ -198,7 +99,7 @@ def run_odometry(sequence, method, frames=None, *, intrinsics=FR3, n_components=
     variant : {"textbook", "authors"}
         The EM (``dgmm.GaussianMixture``'s ``variant``).
     size : {"area", "unit"}
-        Pixel primitive size for ``"gmm-pixels"`` (see ``dgmm.pixels.pixel_primitives``).
+        Pixel primitive size for ``"gmm-pixels"`` (see ``dgmm.odometry.pixels.pixel_primitives``).
     n_icp_points : int
         Points drawn per frame for ``"icp"`` (paper: 2,500).
     seed : int
@@ -250,39 +151,7 @@ def run_odometry(sequence, method, frames=None, *, intrinsics=FR3, n_components=
                     tuple(registrations), np.array(cpu_seconds))
 
 
-# ------------------------------------------------------------------------------------------------ tables
-def first_frames(sequence, n_frames, max_difference=MAX_TIME_DIFFERENCE):
-    """The first ``n_frames`` frames of a sequence (all of them when it is shorter) and their ground truth.
-
-    Parameters
-    ----------
-    sequence : TumSequence
-    n_frames : int
-    max_difference : float
-
-    Returns
-    -------
-    frames : ndarray of shape (n_used,)
-        ``0, 1, …, min(n_frames, len(sequence)) − 1``.
-    groundtruth : Trajectory
-        Ground truth of those frames that have a partner within ``max_difference`` s, stamped with their depth
-        timestamps.
-
-    Raises
-    ------
-    DataError
-        The sequence has no ``groundtruth.txt``, or fewer than 3 of the frames have a ground-truth pose (the ATE
-        alignment would not be determined); the message names the file.
-    """
-    frames = np.arange(min(int(n_frames), len(sequence)))
-    matched, poses = sequence.groundtruth_at_frames(max_difference)
-    keep = matched < len(frames)
-    if keep.sum() < 3:
-        raise DataError(f"{sequence.folder / 'groundtruth.txt'}: only {int(keep.sum())} of the first {len(frames)} "
-                        f"depth frames have a ground-truth pose within {max_difference} s")
-    return frames, poses.subset(np.flatnonzero(keep))
-
-
+# ------------------------------------------------------------------------------------------------ timings
 def frame_seconds(odometry):
     """Per-frame timings of a run as table rows.
 

@@ -1,7 +1,7 @@
 """A synthetic TUM RGB-D sequence: ray-cast depth of a small room along a hand-held-like camera path.
 
 Stands in for TUM fr3/long_office_household (paper §V) where the real sequence is absent, in exactly its
-format (see ``dgmm.tum``): ``depth.txt``, ``depth/<timestamp>.png`` (16-bit, metres × 5000, 640×480) and
+format (see ``dgmm.odometry.tum``): ``depth.txt``, ``depth/<timestamp>.png`` (16-bit, metres × 5000, 640×480) and
 ``groundtruth.txt`` at 100 Hz like TUM's motion capture. No RGB images and no ``rgb.txt`` are written; nothing in
 dgmm reads them.
 
@@ -36,8 +36,8 @@ import trimesh
 from scipy.spatial.transform import Rotation
 
 from dgmm.errors import InputError
-from dgmm.pixels import FR3, PIXEL_STEP
-from dgmm.tum import Trajectory, read_sequence, write_depth, write_trajectory
+from dgmm.odometry.pixels import FR3, PIXEL_STEP
+from dgmm.odometry.tum import Trajectory, read_sequence, write_depth, write_trajectory
 
 TUM_EPOCH = 1341847980.0
 """First timestamp of the sequence (s), of the magnitude of fr3's Unix times, so parsing precision is exercised."""
@@ -326,7 +326,7 @@ def write_synthetic_sequence(folder, triangles, n_frames=300, seed=0, intrinsics
             write_depth(staging / name, image)
             listing.append(f"{groundtruth.timestamps[sample]:.6f} {name}\n")
         (staging / "depth.txt").write_text(
-            f"# depth maps\n# synthetic sequence: dgmm.synthetic, seed {seed}, {len(triangles)} triangles\n"
+            f"# depth maps\n# synthetic sequence: dgmm.odometry.synthetic, seed {seed}, {len(triangles)} triangles\n"
             "# timestamp filename\n" + "".join(listing))
         write_trajectory(staging / "groundtruth.txt", groundtruth,
                          header=f"ground truth trajectory (synthetic, seed {seed})")

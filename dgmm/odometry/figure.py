@@ -3,16 +3,16 @@
 Drawn headless: a :class:`matplotlib.figure.Figure` built without pyplot (Agg canvas when saved), and
 :func:`save_png` writes it with no software or time metadata, so the same trajectories give the same bytes.
 Positions are in metres, in the ground truth's world frame, which is z-up for TUM's motion capture and for
-``dgmm.synthetic``: the top-down view is the x–y plane, with equal axes. Each estimate is first moved onto the
-ground truth by the rigid alignment of its ATE (``dgmm.trajectory_metrics.absolute_trajectory_error``), as TUM's and evo's
+``dgmm.odometry.synthetic``: the top-down view is the x–y plane, with equal axes. Each estimate is first moved onto the
+ground truth by the rigid alignment of its ATE (``dgmm.odometry.metrics.absolute_trajectory_error``), as TUM's and evo's
 trajectory plots do.
 """
 from matplotlib.figure import Figure
 
 from dgmm.errors import InputError
 from dgmm.files import atomic_path
-from dgmm.trajectory_metrics import absolute_trajectory_error
-from dgmm.tum import MAX_TIME_DIFFERENCE, read_trajectory
+from dgmm.odometry.metrics import absolute_trajectory_error
+from dgmm.odometry.tum import MAX_TIME_DIFFERENCE, read_trajectory
 
 PLANES = {"xy": (0, 1), "xz": (0, 2), "yz": (1, 2)}
 """Top-down plane name -> the two world axes drawn (horizontal, vertical)."""
@@ -63,7 +63,7 @@ def fig6(panels, *, plane="xy", max_difference=MAX_TIME_DIFFERENCE):
 
     Parameters
     ----------
-    panels : dict of str to (dgmm.tum.Trajectory, dict of str to dgmm.tum.Trajectory)
+    panels : dict of str to (dgmm.odometry.tum.Trajectory, dict of str to dgmm.odometry.tum.Trajectory)
         Sequence name -> (its ground truth, run name -> estimated trajectory), drawn left to right in this order;
         only the part of the ground truth spanned by the estimates' timestamps is drawn. Run names are
         ``method`` or ``method-variant`` (colour by method, line style by EM variant).

@@ -1,7 +1,7 @@
 """Depth pixels as geometry: pinhole intrinsics of TUM's cameras, back-projection and pixel-rectangle primitives.
 
 Camera frame: optical, x right, y down, z forward; pixel ``(u, v)`` is (column, row). Depth in metres, 0 = no
-measurement (``dgmm.tum.read_depth``).
+measurement (``dgmm.odometry.tum.read_depth``).
 """
 from __future__ import annotations
 

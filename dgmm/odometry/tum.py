@@ -269,3 +269,35 @@ def read_sequence(folder):
     groundtruth_file = folder / "groundtruth.txt"
     groundtruth = read_trajectory(groundtruth_file) if groundtruth_file.exists() else None
     return TumSequence(folder, timestamps, tuple(folder / row[1] for row in rows), groundtruth)
+
+
+def first_frames(sequence, n_frames, max_difference=MAX_TIME_DIFFERENCE):
+    """The first ``n_frames`` frames of a sequence (all of them when it is shorter) and their ground truth.
+
+    Parameters
+    ----------
+    sequence : TumSequence
+    n_frames : int
+    max_difference : float
+
+    Returns
+    -------
+    frames : ndarray of shape (n_used,)
+        ``0, 1, …, min(n_frames, len(sequence)) − 1``.
+    groundtruth : Trajectory
+        Ground truth of those frames that have a partner within ``max_difference`` s, stamped with their depth
+        timestamps.
+
+    Raises
+    ------
+    DataError
+        The sequence has no ``groundtruth.txt``, or fewer than 3 of the frames have a ground-truth pose (the ATE
+        alignment would not be determined); the message names the file.
+    """
+    frames = np.arange(min(int(n_frames), len(sequence)))
+    matched, poses = sequence.groundtruth_at_frames(max_difference)
+    keep = matched < len(frames)
+    if keep.sum() < 3:
+        raise DataError(f"{sequence.folder / 'groundtruth.txt'}: only {int(keep.sum())} of the first {len(frames)} "
+                        f"depth frames have a ground-truth pose within {max_difference} s")
+    return frames, poses.subset(np.flatnonzero(keep))
