@@ -180,7 +180,7 @@ class _HandMadeSequence:
 def test_odometry_composes_relative_poses_in_order(monkeypatch):
     """A stand-in method registers frame k+1 onto frame k by the exact relative pose ``T_k⁻¹ T_{k+1}`` of a
     hand-made trajectory of large turns; the loop must return ``T_0⁻¹ T_k`` for every frame. Composing the other
-    way round (``T_rel T_k``), or rotating the relative translation by the new rotation, misses by metres."""
+    way round (``T_rel T_k``), or rotating the relative translation by the new rotation, fails (tried)."""
     from dgmm.odometry import loop
     from dgmm.odometry.pixels import FR3
     from dgmm.registration import Registration
