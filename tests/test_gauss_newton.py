@@ -1,9 +1,9 @@
 """The damped Gauss-Newton pose solver (``dgmm.registration.solvers.minimise_gauss_newton``) on a cost written here.
 
 The cost is the squared distance of moved points to their known targets,
-``f(R, t') = Σ |R (x_n − c) + c + t' − y_n|²``, with its gradient, Gauss-Newton matrix and exact Hessian over ``(δ, ω)`` (translation ``t' + δ``, left rotation
-``exp([ω]x) R``) derived by hand below and checked against central differences. The true pose is known, so the
-solver's result is checked against it, not against another solver.
+``f(R, t') = Σ |R (x_n − c) + c + t' − y_n|²``, with its gradient, Gauss-Newton matrix and exact Hessian over
+``(δ, ω)`` (translation ``t' + δ``, left rotation ``exp([ω]x) R``) derived by hand below and checked against central
+differences. The true pose is known, so the solver's result is checked against it, not against another solver.
 """
 import numpy as np
 import pytest
