@@ -47,14 +47,24 @@ def hand_over():
         return
     connection = socket.socket(socket.AF_UNIX, socket.SOCK_SEQPACKET)
     request = dict(argv=[os.path.abspath(sys.argv[0]), *sys.argv[1:]], cwd=os.getcwd(), env=dict(os.environ))
+    # Signals are caught from before the request: one that comes before the fork's pid is known waits for it (the
+    # fork is already running the script), so none is lost to the client's default action.
+    fork, pending = [], []
+    handlers = {number: signal.signal(number, lambda number, frame: _signal(fork[0], number) if fork
+                                      else pending.append(number)) for number in _FORWARDED}
     try:
         connection.connect(address)
         socket.send_fds(connection, [json.dumps(request).encode()], [0, 1, 2])
-        pid = int(connection.recv(32))  # b"" (no fork made): ValueError
-    except (OSError, ValueError):
-        return  # no server here: nothing ran, so run the job in this process
-    for number in _FORWARDED:
-        signal.signal(number, lambda number, frame: _signal(pid, number))
+        fork.append(int(connection.recv(32)))  # b"" (no fork made): ValueError
+    except (OSError, ValueError):  # no server here: nothing ran, so run the job in this process
+        for number, handler in handlers.items():
+            signal.signal(number, handler)
+        for number in pending:
+            os.kill(os.getpid(), number)
+        return
+    pid = fork[0]
+    for number in pending:
+        _signal(pid, number)
     reply = connection.recv(32)
     if not reply:  # the server died under the job: fail it, and stop its orphaned fork from writing on
         _signal(pid, signal.SIGTERM)
