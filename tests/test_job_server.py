@@ -106,9 +106,9 @@ def test_script_imports_lists_absolute_imports_once_in_order(tmp_path):
     assert script_imports([tmp_path / "a.py", tmp_path / "b.py"]) == ["sys", "dgmm.data", "numpy"]
 
 
-def started_job(tmp_path, body, name="job.py"):
-    """Start a job script that prints its pid, then runs ``body``; returns (client process, fork pid)."""
-    job = script(tmp_path, name, "import os, signal, sys, time\nprint(os.getpid(), flush=True)\n" + body)
+def started_job(tmp_path, body, name="job.py", setup=""):
+    """Start a job script that runs ``setup``, prints its pid, then runs ``body``; returns (client, fork pid)."""
+    job = script(tmp_path, name, "import os, signal, sys, time\n" + setup + "print(os.getpid(), flush=True)\n" + body)
     client = subprocess.Popen([sys.executable, job], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     return client, int(client.stdout.readline())
 
@@ -132,8 +132,8 @@ def test_termination_signals_reach_the_fork_as_themselves(server, tmp_path, numb
     """Snakemake cancels a job with SIGTERM (a closed terminal sends SIGHUP): the fork must get that very signal.
     Its handler here prints the number and exits 7, which must be the client's status. Without forwarding, the
     client dies of the signal itself (status -n) and the server's fallback sends the fork SIGTERM (tried)."""
-    client, fork = started_job(tmp_path, "signal.signal(signal.%s, lambda n, f: (print('got', n), sys.exit(7)))\n"
-                                         "time.sleep(60)\n" % signal.Signals(number).name)
+    client, fork = started_job(tmp_path, "time.sleep(60)\n", setup="signal.signal(signal.%s, lambda n, f: "
+                               "(print('got', n), sys.exit(7)))\n" % signal.Signals(number).name)
     client.send_signal(number)
     code, out, _ = finish(client)
     assert (code, out) == (7, f"got {int(number)}\n")
