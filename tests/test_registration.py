@@ -341,7 +341,7 @@ def test_p2d_solvers_reach_the_same_optimum(bunny):
 
 @pytest.mark.slow
 def test_d2d_solvers_reach_the_same_optimum(bunny, bunny_trial):
-    c, r, t = bunny_trial.centre, bunny_trial.rotation, bunny_trial.translation
+    c = bunny_trial.centre
     for trial in reg.random_trials(3, 51, bunny.diagonal, c, max_angle_deg=3.0, max_translation=0.005):
         moving = _transformed_mixture(bunny.mixture, trial.rotation, trial.centre + trial.translation
                                       - trial.rotation @ trial.centre)
