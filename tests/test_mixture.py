@@ -205,7 +205,7 @@ def test_authors_variant_equals_an_independent_implementation_on_unequal_triangl
     centroids, areas = triangles.mean(axis=1), bunny_res4.area_faces
     assert areas.max() / areas.min() > 20
     offsets = triangles - centroids[:, None]
-    triangle_covariances = np.einsum("pvi,pvj->pij", offsets, offsets) / 12  # (A Aᵀ + B Bᵀ + C Cᵀ − 3 m mᵀ) / 12
+    triangle_covariances = np.einsum("pvi,pvj->pij", offsets, offsets) / 12  # paper: (AAᵀ + BBᵀ + CCᵀ − 3mmᵀ) / 12
     rng = np.random.default_rng(11)
     k, n_iter, reg_covar = 6, 8, 1e-6
     start_weights = rng.dirichlet(np.ones(k))
