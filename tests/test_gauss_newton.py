@@ -180,3 +180,24 @@ def test_callback_sees_every_kept_step_and_the_last_is_the_result():
     np.testing.assert_array_equal(seen[-1][1].translation, result.translation)
     costs = [registration.objective for _, registration in seen]
     assert all(later <= earlier for earlier, later in zip(costs, costs[1:]))  # kept steps never raise the cost
+
+
+def test_d2d_gauss_newton_registers_a_mixture_onto_its_moved_copy_exactly():
+    """D2D of a mixture fitted to the bunny onto the same mixture moved by a known pose (10 deg, 1 cm): the cost's
+    minimum is that pose, so Gauss-Newton must return its inverse to the stopping tolerance (1e-8)."""
+    import trimesh
+
+    from conftest import SHARED_DATA
+    from dgmm.mixture import GaussianMixture
+    from dgmm.registration import register_d2d
+
+    mixture = GaussianMixture(10, random_state=0).fit(trimesh.load(SHARED_DATA / "stanford" / "bunny_res4.ply",
+                                                                   process=False))
+    rotation = Rotation.from_rotvec(np.radians(10) * np.array([0.6, 0.0, 0.8])).as_matrix()
+    translation = np.array([0.01, -0.004, 0.006])
+    covariances = rotation @ mixture.covariances_ @ rotation.T
+    moved = GaussianMixture.from_parameters(mixture.weights_, mixture.means_ @ rotation.T + translation, covariances)
+    result = register_d2d(mixture, moved, solver="gauss-newton")
+    assert result.converged
+    assert Rotation.from_matrix(result.rotation @ rotation).magnitude() < 1e-8
+    np.testing.assert_allclose(result.translation, -rotation.T @ translation, atol=1e-8 * 0.1)
