@@ -6,11 +6,14 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 from tests.workflow import REPO, SNAKEMAKE
 
 CONDA_LINT = "Specify a conda environment or container for each rule."
 
 
+@pytest.mark.slow  # runs Snakemake (7 s): make check runs none
 def test_lint_asks_only_for_conda_environments(tmp_path):
     command = [str(SNAKEMAKE), "--snakefile", str(REPO / "Snakefile"), "--directory", str(tmp_path),
                "--configfile", str(REPO / "config.yaml"), "--lint"]
