@@ -27,6 +27,7 @@ check: $(STAMP)
 bench: $(STAMP)
 	$(VENV)/bin/python benchmarks/em_speed.py
 	$(VENV)/bin/python benchmarks/registration_speed.py
+	$(VENV)/bin/python benchmarks/cpd_speed.py
 
 profile: $(STAMP)  # cold sweep of a clone of HEAD in sweep units, per-rule job times (README "Sweep profile")
 	$(VENV)/bin/python benchmarks/sweep_profile.py --cores $(CORES)
