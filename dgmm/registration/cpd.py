@@ -5,11 +5,11 @@ for operation: pycpd's initial variance, its outlier weight ``w``, its E-step th
 variance), its objective ``q`` and its stopping rule ``|q - q_previous| <= tol``, its variance floor, and its scale
 (fitted, then dropped: the rigid part is the Kabsch fit of the source to the moved source, as the authors read it).
 Only the E-step's memory traffic differs: pycpd builds an ``(n_source, n_target, 3)`` difference array and tiles
-the column sums every iteration; here the squared distances are accumulated one coordinate at a time in one
-``(n_source, n_target)`` buffer, in pycpd's order of summation, and the column sums are broadcast. Every floating
-point operation is pycpd's, so the poses agree with pycpd's to the last bits on the same inputs (tests/
-test_registration.py checks it to 1e-9 on seeded problems, some stopping by tolerance), at about a sixth of its
-time (benchmarks/registration_speed.py).
+the column sums every iteration; here scipy's ``cdist`` writes the squared distances into one reused
+``(n_source, n_target)`` buffer, summing in pycpd's order, and the column sums are broadcast. Every floating point
+operation is pycpd's, so the poses agree with pycpd's to the last bit on the same inputs (tests/test_cpd.py checks
+them to 1e-9 on seeded problems, some stopping by tolerance; the sweep's 250 Fig 5 trials come out byte-identical),
+in a fraction of its time (benchmarks/cpd_speed.py).
 
 Points are rows, as everywhere in :mod:`dgmm.registration`: the source (pycpd's ``Y``, the moving mixture's
 centroids) has shape ``(n_source, 3)``, the target (pycpd's ``X``) ``(n_target, 3)``.
@@ -19,6 +19,7 @@ from __future__ import annotations
 import time
 
 import numpy as np
+from scipy.spatial.distance import cdist
 
 from dgmm.errors import InputError
 from dgmm.registration.checks import as_points
@@ -36,20 +37,16 @@ def initial_variance(source, target):
     return np.sum(squared) / (squared.shape[2] * len(source) * len(target))
 
 
-def squared_distances(moved, target, out, scratch):
-    """``out[m, n] = |target[n] - moved[m]|²``, shape (n_source, n_target), summed over x, y, z in that order
-    (pycpd's ``np.sum(diff ** 2, axis=2)`` to the bit) without its 3-D array; ``scratch`` is a buffer of ``out``'s
-    shape."""
-    np.subtract(target[:, 0], moved[:, 0, None], out=out)
-    np.multiply(out, out, out=out)
-    for axis in (1, 2):
-        np.subtract(target[:, axis], moved[:, axis, None], out=scratch)
-        np.multiply(scratch, scratch, out=scratch)
-        out += scratch
-    return out
+def squared_distances(moved, target, out):
+    """``out[m, n] = |target[n] - moved[m]|²``, shape (n_source, n_target), written in place.
+
+    scipy's ``cdist`` sums the squared coordinate differences over x, y, z in that order in one C loop: pycpd's
+    ``np.sum(diff ** 2, axis=2)`` to the bit, without its (n_source, n_target, 3) array.
+    """
+    return cdist(moved, target, "sqeuclidean", out=out)
 
 
-def _e_step(moved, target, sigma2, w, posterior, scratch):
+def _e_step(moved, target, sigma2, w, posterior):
     """Posterior of every (moved source point, target point) pair, in place in ``posterior`` (n_source, n_target).
 
     Returns ``(posterior, Pt1, P1, Np)``: the posterior, its column sums (n_target,), row sums (n_source,) and
@@ -60,7 +57,7 @@ def _e_step(moved, target, sigma2, w, posterior, scratch):
     uniform = (2 * np.pi * sigma2) ** (dims / 2)  # the outlier term, zero for pycpd's default w = 0
     uniform = uniform * w / (1 - w)
     uniform = uniform * n_source / n_target
-    squared_distances(moved, target, posterior, scratch)
+    squared_distances(moved, target, posterior)
     np.divide(posterior, -(2 * sigma2), out=posterior)  # = -d² / (2 sigma²) to the bit: rounding is sign-symmetric
     np.exp(posterior, out=posterior)
     denominator = np.sum(posterior, axis=0)
@@ -136,10 +133,10 @@ def register_cpd(source, target, max_iter=150, tol=1e-9, w=0.0, callback=None):
     sigma2 = initial_variance(source, target)
     rotation, scale, translation = np.eye(3), 1, np.zeros(3)
     moved = scale * np.dot(source, rotation) + translation
-    posterior, scratch = np.empty((len(source), len(target))), np.empty((len(source), len(target)))
+    posterior = np.empty((len(source), len(target)))
     q, change, iteration = np.inf, np.inf, 0
     while iteration < max_iter and change > tol:
-        posterior, column_sums, row_sums, total = _e_step(moved, target, sigma2, w, posterior, scratch)
+        posterior, column_sums, row_sums, total = _e_step(moved, target, sigma2, w, posterior)
         rotation, scale, translation, a, target_centred, ypy = _m_step(source, target, posterior, row_sums, total)
         moved = scale * np.dot(source, rotation) + translation
         previous = q
