@@ -10,6 +10,11 @@ sized blocks ``GaussianMixture.score`` uses, and in one block of all rows (as be
 The evaluation set is a Poisson-disk sample of bunny res4 as the data stage draws it (dgmm.meshes.poisson_disk; a
 few seconds, not timed). Times are process CPU and wall; the load average is printed beside them.
 
+Before all this a job starts: Snakemake runs the script in a new Python whose first lines are Snakemake's preamble
+(unpickling the job's ``snakemake`` object imports parts of Snakemake), then ``hand_over`` sends it to the server,
+which forks. Timed last, on a job server of the sweep's preloads: 10 runs of a script that only hands over, and of
+one with the preamble's imports before it (median wall; CPU of the client processes, not of the forks).
+
 Run: ``python benchmarks/fit_job_phases.py [--input res4-exact] [--components 100] [--init kmeans]
 [--variant textbook]``
 """
@@ -19,6 +24,9 @@ for _variable in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ[_variable] = "1"
 
 import argparse  # noqa: E402
+import resource  # noqa: E402
+import subprocess  # noqa: E402
+import sys  # noqa: E402
 import tempfile  # noqa: E402
 import time  # noqa: E402
 from pathlib import Path  # noqa: E402
@@ -29,11 +37,15 @@ from threadpoolctl import threadpool_limits  # noqa: E402
 
 import dgmm.mixture  # noqa: E402
 from dgmm.data import load_mesh, save_ply  # noqa: E402
+from dgmm.job_server import JobServer, script_imports  # noqa: E402
 from dgmm.meshes import poisson_disk  # noqa: E402
 from dgmm.recording import FitRecorder  # noqa: E402
 from dgmm.sweep import SIZED, build_input, fit_seeds, parse_input  # noqa: E402
 
-BUNNY = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "stanford" / "bunny_res4.ply"
+REPO = Path(__file__).resolve().parents[1]
+BUNNY = REPO / ".." / "shared" / "data" / "stanford" / "bunny_res4.ply"
+HAND_OVER = "from dgmm.job_server import hand_over\nhand_over()\n"
+PREAMBLE = "import pickle\nfrom snakemake.logging import logger\nfrom snakemake.iocontainers import Snakemake\n"
 
 
 class Phases:
@@ -55,6 +67,31 @@ def _cpu(function, repeats=3):
         function()
         best = min(best, time.process_time() - start)
     return best
+
+
+def start_seconds(folder, runs=10):
+    """{script: (median wall, mean client CPU)} of jobs that only hand over to a job server of the sweep's preloads,
+    without and with Snakemake's preamble imports before."""
+    scripts = {"hand over only": HAND_OVER, "preamble, then hand over": PREAMBLE + HAND_OVER}
+    server = JobServer(["snakemake.script", *script_imports(sorted((REPO / "workflow" / "scripts").glob("*.py")))])
+    server.start()
+    try:
+        results = {}
+        for name, text in scripts.items():
+            path = folder / f"{len(results)}.py"
+            path.write_text(text)
+            subprocess.run([sys.executable, path], check=True)  # the first waits for the server's imports
+            walls, before = [], resource.getrusage(resource.RUSAGE_CHILDREN)
+            for _ in range(runs):
+                start = time.perf_counter()
+                subprocess.run([sys.executable, path], check=True)
+                walls.append(time.perf_counter() - start)
+            after = resource.getrusage(resource.RUSAGE_CHILDREN)
+            cpu = (after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime) / runs
+            results[name] = (float(np.median(walls)), cpu)
+        return results
+    finally:
+        server.stop()
 
 
 def main():
@@ -107,6 +144,8 @@ def main():
         print(f"{name:>72} {wall:7.3f} {cpu:6.3f}")
     print(f"one score of {len(evaluation)} points, CPU: {1e3 * blocked:.1f} ms in 1 MiB blocks, {1e3 * one_block:.1f} ms "
           f"in one block ({one_block / blocked:.2f}x)")
+    for name, (wall, cpu) in start_seconds(folder).items():
+        print(f"job start, {name}: median wall {wall:.3f} s, client CPU {cpu:.3f} s")
     print(f"load average at end: {os.getloadavg()}")
 
 
