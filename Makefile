@@ -31,6 +31,7 @@ docs: $(STAMP)  # the site into docs/_build/html, running the gallery's examples
 bench: $(STAMP)
 	$(VENV)/bin/python benchmarks/em_speed.py
 	$(VENV)/bin/python benchmarks/registration_speed.py
+	$(VENV)/bin/python benchmarks/cpd_speed.py
 
 profile: $(STAMP)  # cold sweep of a clone of HEAD in sweep units, per-rule job times (docs/benchmarks.md)
 	$(VENV)/bin/python benchmarks/sweep_profile.py --cores $(CORES)

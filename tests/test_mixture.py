@@ -124,6 +124,20 @@ def test_points_agree_with_scikit_learn_from_the_same_start(bunny_res4, n_compon
     assert ours.n_iter_ == 25 and not ours.converged_
 
 
+def test_scores_of_many_points_do_not_depend_on_the_blocks(bunny_res4):
+    """Scoring streams over cache-sized blocks of rows (655 at K=200): every point's log-likelihood must be
+    scikit-learn's under the same parameters, and the same bits however the points are split."""
+    gmm = GaussianMixture(200, max_iter=5, random_state=0).fit(bunny_res4)
+    points = trimesh.sample.sample_surface(bunny_res4, 3000, seed=6)[0]
+    reference = SklearnGaussianMixture(200, covariance_type="full")
+    reference.weights_, reference.means_ = gmm.weights_, gmm.means_
+    reference.covariances_, reference.precisions_cholesky_ = gmm.covariances_, gmm.precisions_cholesky_
+    scores = gmm.score_samples(points)
+    np.testing.assert_allclose(scores, reference.score_samples(points), rtol=0, atol=1e-9)
+    split = np.concatenate([gmm.score_samples(points[:1000]), gmm.score_samples(points[1000:])])
+    assert np.array_equal(scores, split)
+
+
 def random_mesh(seed, n_faces):
     rng = np.random.default_rng(seed)
     vertices = rng.normal(size=(n_faces + 2, 3)) * rng.uniform(0.2, 3.0, size=3)
