@@ -1,5 +1,5 @@
 # dgmm benchmark service: the paper's experiments as one Snakemake DAG.
-# `snakemake --cores 2` runs the full sweep and its report; see README.md.
+# `snakemake --cores 2` runs the full sweep and its report; see README.md and docs/user_guide/workflow.md.
 from pathlib import Path
 
 from snakemake.utils import min_version

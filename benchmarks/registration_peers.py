@@ -9,7 +9,7 @@ and moves the trial's source:
 
 - ours: P2D with the paper's BFGS and with the Gauss-Newton solver, on both mixtures (all trials); D2D from the
   mesh mixture to a K=100 mixture fitted to the moved source points (fit time not counted), with both solvers;
-  the authors' both-ways ICP and pycpd's rigid CPD (to the target points);
+  the authors' both-ways ICP and rigid CPD (pycpd's algorithm, dgmm.registration.cpd; to the target points);
 - peers (optional extra ``pip install -e '.[peers]'``), to the target points, with their defaults except:
   ICP-like methods get a correspondence distance of a quarter of the model's bounding-box diagonal (the trial
   offsets reach 36% of it) and at most 100 iterations; point-to-plane ICP gets target normals from 30 neighbours
@@ -20,7 +20,7 @@ Times are per registration, wall and process CPU time, one thread (OMP, BLAS and
 medians; the machine's load average is printed beside them, because other jobs share the cores.
 
 Run: ``python benchmarks/registration_peers.py [--trials 250] [--peer-trials 20] [--table1-trials 10]
-[--output table.md]`` (about 10 minutes on a loaded 2-core machine; pycpd, GMMReg and GMMTree take seconds per
+[--output table.md]`` (about 10 minutes on a loaded 2-core machine; GMMReg and GMMTree take seconds per
 registration, hence the smaller subsets).
 """
 import os
@@ -90,7 +90,7 @@ def ours(mixtures, diagonal):
         "D2D mesh-kmeans to moved-points GMM, BFGS": d2d("bfgs"),
         "D2D mesh-kmeans to moved-points GMM, Gauss-Newton": d2d("gauss-newton"),
         "ICP both ways (paper's baseline)": lambda s: reg.register_icp(s.moved, s.target),
-        "CPD (pycpd, rigid)": lambda s: reg.register_cpd(s.moved, s.target),
+        "CPD (rigid, pycpd's algorithm)": lambda s: reg.register_cpd(s.moved, s.target),
     }
 
 

@@ -12,13 +12,22 @@ so that runs on machines of different speed compare. Steps:
    ``snakemake --cores N``, the clone first on ``PYTHONPATH``);
 4. read every job's Snakemake ``benchmark:`` file (``results/benchmarks/{rule}/...tsv``, its wall time ``s``) and,
    for the rules that time their own computation, the job's timing table (the seconds a fit's seeds, a chunk's
-   trials or an odometry run's frames took): overhead = job wall time - computation.
+   trials or an odometry run's frames took): overhead = job wall time - computation;
+5. account for the cores' idle time, ``cores x wall - sum of job walls``, from Snakemake's metadata
+   (``.snakemake/metadata``: each job's start, the time its outputs were written, its inputs): before the first
+   job starts (Snakemake builds the DAG), with fewer jobs running than cores (between a job's end and the next
+   start on its core Snakemake checks and records outputs and selects jobs), after the last job, and the rest
+   (inside a job's span but outside its benchmark window: Snakemake starting the script); and the critical
+   path, the longest chain of jobs through the DAG, the wall time no number of cores could beat.
 
-Usage: ``python benchmarks/sweep_profile.py [--cores 2] [--keep]`` (``make profile``); it prints the README's
-"Sweep profile" section, ready to paste.
+Usage: ``python benchmarks/sweep_profile.py [--cores 2] [--keep]`` (``make profile``); it prints the "Sweep profile"
+section of docs/benchmarks.md, ready to paste. ``--workdir DIR`` prints the tables of a run already made in ``DIR``
+(its wall time taken from its first job's start to its last job's end).
 """
 import argparse
+import base64
 import csv
+import json
 import os
 import shutil
 import subprocess
@@ -82,11 +91,100 @@ def rule_table(jobs):
     return "\n".join(lines)
 
 
+def job_spans(workdir):
+    """Every job of the Snakemake run in ``workdir``, from its metadata (one record per output file): a list of
+    dicts with ``rule``, ``start`` (epoch seconds Snakemake marked the outputs incomplete, starting the job),
+    ``end`` (the outputs' last modification), ``inputs`` and ``outputs`` (paths relative to ``workdir``)."""
+    root = Path(workdir) / ".snakemake" / "metadata"
+    jobs = {}
+    for path in sorted(p for p in root.rglob("*") if p.is_file()):
+        # a long path's base64 name is split into folders whose names start with "@"
+        output = base64.urlsafe_b64decode("".join(part.lstrip("@") for part in path.relative_to(root).parts))
+        record = json.loads(path.read_text())
+        job = jobs.setdefault((record["rule"], record["job_hash"]),
+                              dict(rule=record["rule"], start=record["starttime"], end=record["endtime"],
+                                   inputs=set(record["input"]), outputs=set()))
+        job["start"], job["end"] = min(job["start"], record["starttime"]), max(job["end"], record["endtime"])
+        job["outputs"].add(output.decode())
+    return list(jobs.values())
+
+
+def running_below(spans, cores):
+    """Core-seconds left idle while fewer than ``cores`` of the jobs ``spans`` ran, between the first start and
+    the last end."""
+    events = sorted([(job["start"], 1) for job in spans] + [(job["end"], -1) for job in spans])
+    idle, running, previous = 0.0, 0, events[0][0]
+    for moment, change in events:
+        idle += max(0, cores - running) * (moment - previous)
+        running, previous = running + change, moment
+    return idle
+
+
+def critical_path(spans):
+    """The chain of jobs, each using an output of the one before, whose spans add up longest: (seconds, rules
+    of the chain in order)."""
+    producer = {output: index for index, job in enumerate(spans) for output in job["outputs"]}
+    longest = {}
+
+    def finish(index):  # the longest chain ending with job ``index``: (seconds, previous job or None)
+        if index not in longest:
+            job = spans[index]
+            before = max(((finish(producer[f])[0], producer[f]) for f in job["inputs"] if f in producer),
+                         default=(0.0, None))
+            longest[index] = (before[0] + job["end"] - job["start"], before[1])
+        return longest[index]
+
+    for index in sorted(range(len(spans)), key=lambda i: spans[i]["start"]):  # producers first: shallow recursion
+        finish(index)
+    last = max(longest, key=lambda i: longest[i][0])
+    chain, index = [], last
+    while index is not None:
+        chain.append(spans[index]["rule"])
+        index = longest[index][1]
+    return longest[last][0], chain[::-1]
+
+
+def idle_table(spans, jobs, cores, wall, run_start=None, run_end=None):
+    """Markdown lines accounting for the run's idle core-seconds, ``cores x wall - sum of job walls`` (job walls
+    from the benchmark files, ``jobs`` as :func:`job_times` returns), and its critical path."""
+    job_wall = sum(w for times in jobs.values() for w, _ in times)
+    first, last = min(j["start"] for j in spans), max(j["end"] for j in spans)
+    before = cores * (first - run_start) if run_start is not None else 0.0
+    after = cores * (run_end - last) if run_end is not None else 0.0
+    below = running_below(spans, cores)
+    idle = cores * wall - job_wall
+    length, chain = critical_path(spans)
+    steps = [rule for i, rule in enumerate(chain) if i == 0 or rule != chain[i - 1]]
+    return "\n".join([
+        f"Idle core-seconds ({cores} x wall - sum of job walls): **{idle:.0f}** of {cores * wall:.0f} "
+        f"({100 * idle / (cores * wall):.0f}%):",
+        "",
+        "| where | core-seconds |",
+        "|---|---:|",
+        f"| before the first job (Snakemake starts, builds the DAG) | {before:.0f} |",
+        f"| fewer jobs running than cores (a job's end to its core's next start included: Snakemake checks "
+        f"and records outputs, selects the next jobs) | {below:.0f} |",
+        f"| after the last job | {after:.0f} |",
+        f"| inside jobs' spans, outside their benchmark windows (Snakemake starting the job's script) "
+        f"| {idle - before - below - after:.0f} |",
+        "",
+        f"Critical path (the longest chain of jobs, each using an output of the one before): {length:.0f} s, "
+        f"{len(chain)} jobs: {' → '.join(steps)}.",
+    ])
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--cores", type=int, default=2)
     parser.add_argument("--keep", action="store_true", help="keep the clone (its results/) after the run")
+    parser.add_argument("--workdir", type=Path, help="only print the tables of the run already made in this folder")
     args = parser.parse_args()
+    if args.workdir is not None:
+        spans = job_spans(args.workdir)
+        jobs = job_times(args.workdir / "results")
+        print(rule_table(jobs) + "\n")
+        print(idle_table(spans, jobs, args.cores, max(j["end"] for j in spans) - min(j["start"] for j in spans)))
+        return
 
     clone = Path(tempfile.mkdtemp(prefix="sweep-profile-", dir=REPO.parent))
     try:
@@ -98,9 +196,9 @@ def main():
         load_before = os.getloadavg()
         env = {**os.environ, "PYTHONPATH": str(clone)}
         snakemake = Path(sys.executable).with_name("snakemake")
-        start = time.perf_counter()
+        start, run_start = time.perf_counter(), time.time()
         subprocess.run([str(snakemake), "--cores", str(args.cores)], cwd=clone, env=env, check=True)
-        wall = time.perf_counter() - start
+        wall, run_end = time.perf_counter() - start, time.time()
         load = os.getloadavg()
         print("### Sweep profile\n")
         print(f"`make profile` at commit {commit}: cold sweep {wall:.0f} s on {args.cores} cores; yardstick "
@@ -110,7 +208,9 @@ def main():
               "Per rule, from each job's Snakemake `benchmark:` file (results/benchmarks/) and, for `fit` and "
               "`registration_chunk`, the job's own timing table (its seeds' or trials' seconds): overhead is the "
               "rest of the job (starting it, loading, scoring, recordings; goal ≤ 1 s median).\n")
-        print(rule_table(job_times(clone / "results")))
+        jobs = job_times(clone / "results")
+        print(rule_table(jobs) + "\n")
+        print(idle_table(job_spans(clone), jobs, args.cores, wall, run_start, run_end))
     finally:
         if args.keep:
             print(f"\nkept {clone}")

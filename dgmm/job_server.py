@@ -6,9 +6,10 @@ starting Python and importing scikit-learn, trimesh, rerun and this library. One
 its command line, working directory, environment and standard streams, and waits. The server forks, the fork
 runs the script from the top (its imports are already loaded, and ``hand_over`` returns at once there), and
 the fork's exit status becomes the script's. A signal to the waiting script (Ctrl-C, Snakemake cancelling the
-job) goes on to the fork, and a script that dies kills its fork. Without a server (a script run by hand, a
-cluster node) ``hand_over`` returns and the job runs where it is. The fork runs the same interpreter and
-libraries on the same inputs, so results are bit for bit those of a fresh process.
+job) goes on to the fork, a script that dies kills its fork, and a server that dies under a job fails the job
+and ends its fork. Without a server (a script run by hand, a cluster node) ``hand_over`` returns and the job
+runs where it is. The fork runs the same interpreter and libraries on the same inputs, so results are bit for
+bit those of a fresh process.
 
 The server never computes: a fork of a process whose thread pools (OpenMP, BLAS) have run would inherit
 them broken, so it only imports, with BLAS and OpenMP at one thread as a one-thread job has them.
@@ -46,16 +47,28 @@ def hand_over():
         return
     connection = socket.socket(socket.AF_UNIX, socket.SOCK_SEQPACKET)
     request = dict(argv=[os.path.abspath(sys.argv[0]), *sys.argv[1:]], cwd=os.getcwd(), env=dict(os.environ))
+    # Signals are caught from before the request: one that comes before the fork's pid is known waits for it (the
+    # fork is already running the script), so none is lost to the client's default action.
+    fork, pending = [], []
+    handlers = {number: signal.signal(number, lambda number, frame: _signal(fork[0], number) if fork
+                                      else pending.append(number)) for number in _FORWARDED}
     try:
         connection.connect(address)
         socket.send_fds(connection, [json.dumps(request).encode()], [0, 1, 2])
-        pid = int(connection.recv(32))  # b"" (no fork made): ValueError
-    except (OSError, ValueError):
-        return  # no server here: nothing ran, so run the job in this process
-    for number in _FORWARDED:
-        signal.signal(number, lambda number, frame: _signal(pid, number))
+        fork.append(int(connection.recv(32)))  # b"" (no fork made): ValueError
+    except (OSError, ValueError):  # no server here: nothing ran, so run the job in this process
+        for number, handler in handlers.items():
+            signal.signal(number, handler)
+        for number in pending:
+            os.kill(os.getpid(), number)
+        return
+    pid = fork[0]
+    for number in pending:
+        _signal(pid, number)
     reply = connection.recv(32)
-    code = int(reply) if reply else 1  # the server died under the job
+    if not reply:  # the server died under the job: fail it, and stop its orphaned fork from writing on
+        _signal(pid, signal.SIGTERM)
+    code = int(reply) if reply else 1
     if code < 0:  # the fork died of a signal: die of it too, as the script itself would have
         signal.signal(-code, signal.SIG_DFL)
         os.kill(os.getpid(), -code)

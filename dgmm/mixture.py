@@ -46,7 +46,10 @@ _EPS = 10.0 * np.finfo(np.float64).eps
 # Upper-triangle entries of a symmetric 3×3 matrix, in the order the feature table uses.
 _ROWS = np.array([0, 1, 2, 0, 0, 1])
 _COLS = np.array([0, 1, 2, 1, 2, 2])
-_SCORE_CHUNK = 1 << 16  # rows per block when scoring, to bound memory at n_rows × n_components
+# Bytes of log rho per block when scoring: a block stays in the CPU cache through the normalisation's passes (2x
+# faster than 64k-row blocks at K = 100-400 on 50k points); rows are scored independently, so blocks change no bit.
+_SCORE_BLOCK_BYTES = 1 << 20
+_TABLE_CHUNK = 1 << 16  # rows per block when building a moment table, to bound its (rows, 3, 3) temporaries
 _KMEANS_SAMPLE = 1 << 17  # k-means initialisation runs on at most this many primitives (a random subsample)
 # Floor for log rho − max before exp. exp(−300) ≈ 5e−131 vanishes beside the row's largest term (1) exactly as
 # 0 would, but keeps exp off its slow underflow path and keeps responsibility × moment products in the M-step
@@ -163,8 +166,8 @@ def _moment_table(prims, centre, unit):
     """:func:`_moment_features` (scale 1) of all ``prims``, built chunk by chunk so that its (n_prims, 3, 3)
     temporaries never exist for all primitives at once."""
     table = np.empty((len(prims), 11))
-    for start in range(0, len(prims), _SCORE_CHUNK):
-        rows = slice(start, start + _SCORE_CHUNK)
+    for start in range(0, len(prims), _TABLE_CHUNK):
+        rows = slice(start, start + _TABLE_CHUNK)
         table[rows] = _moment_features(prims.means[rows], prims.covariances[rows], centre, 1.0, unit)
     return table
 
@@ -201,14 +204,26 @@ def _log_rho(features, params, out=None, unit=1.0):
     return np.dot(features, _component_coefficients(*params, unit=unit).T, out=out)
 
 
-def _normalise_in_place(log_rho):
-    """Turn ``log rho`` into responsibilities in place; return ``logsumexp_i log rho`` per row (n_rows,)."""
+def _exp_shifted_in_place(log_rho):
+    """Replace ``log rho`` by ``exp(max(log rho − peak, floor))`` in place; return ``peak`` and the row sums,
+    both (n_rows,)."""
     peak = log_rho.max(axis=1)
     log_rho -= peak[:, None]
     np.maximum(log_rho, _LOG_FLOOR, out=log_rho)
     np.exp(log_rho, out=log_rho)
-    total = log_rho.sum(axis=1)
+    return peak, log_rho.sum(axis=1)
+
+
+def _normalise_in_place(log_rho):
+    """Turn ``log rho`` into responsibilities in place; return ``logsumexp_i log rho`` per row (n_rows,)."""
+    peak, total = _exp_shifted_in_place(log_rho)
     log_rho /= total[:, None]
+    return peak + np.log(total)
+
+
+def _log_normaliser(log_rho):
+    """``logsumexp_i log rho`` per row (n_rows,), overwriting ``log rho`` (scoring needs no responsibilities)."""
+    peak, total = _exp_shifted_in_place(log_rho)
     return peak + np.log(total)
 
 
@@ -526,13 +541,14 @@ class GaussianMixture(BaseEstimator):
         centre = self.weights_ @ self.means_
         unit, _ = _unit(self.means_ - centre, self.covariances_, self.weights_)
         params = (self.weights_, (self.means_ - centre) / unit, self.precisions_cholesky_ * unit)
-        for start in range(0, len(prims), _SCORE_CHUNK):
-            block = slice(start, start + _SCORE_CHUNK)
+        rows = max(1, _SCORE_BLOCK_BYTES // (8 * len(self.weights_)))
+        for start in range(0, len(prims), rows):
+            block = slice(start, start + rows)
             features = _moment_features(prims.means[block], prims.covariances[block], centre, 1.0, unit)
             yield _log_rho(features, params, unit=unit)
 
     def _log_norm(self, prims):
-        log_norm = np.concatenate([_normalise_in_place(block) for block in self._log_rho_blocks(prims)])
+        log_norm = np.concatenate([_log_normaliser(block) for block in self._log_rho_blocks(prims)])
         if not np.all(np.isfinite(log_norm)):
             raise InputError(f"{np.count_nonzero(~np.isfinite(log_norm))} of {len(log_norm)} primitives have a "
                              f"log-likelihood beyond float64 under this mixture: they lie too far from it")

@@ -131,10 +131,10 @@ CASES = {
     "fit missing input": cli_case("fit", "{i}/missing.ply", "-k", 2, "-o", "{o}/m.npz", match="missing.ply"),
     "fit unreadable input": cli_case("fit", "{i}/junk.ply", "-k", 2, "-o", "{o}/m.npz", match="junk.ply"),
     "fit NaN input": cli_case("fit", "{i}/nan.xyz", "-k", 2, "-o", "{o}/m.npz", match="nan.xyz.*NaN"),
-    "fit coordinates of 1e200": cli_case("fit", "{i}/huge.xyz", "-k", 2, "-o", "{o}/m.npz",
-                                         match="huge.xyz.*rescale the input"),
+    "fit file of coordinates of 1e200": cli_case("fit", "{i}/huge.xyz", "-k", 2, "-o", "{o}/m.npz",
+                                                 match="huge.xyz.*rescale the input"),
     "fit K=0": fit("-k", 0, match="-k/--components"),
-    "fit K above primitives": fit("-k", 100000, match="larger than"),
+    "fit -k above primitives": fit("-k", 100000, match="larger than"),
     "fit output is a directory": fit("-o", "{o}", match="is a directory"),
     "fit output folder missing": fit("-o", "{o}/no/such/m.npz", match="does not exist"),
     "fit output folder unwritable": fit("-o", UNWRITABLE / "m.npz", match="cannot write"),
@@ -142,7 +142,7 @@ CASES = {
     "fit --rrd folder missing": fit("--rrd", "{o}/no/f.rrd", match="--rrd.*does not exist"),
     # ---- dgmm score
     "score not a model": cli_case("score", "{i}/junk.npz", BUNNY, match="junk.npz"),
-    "score points too far": cli_case("score", "{i}/model.npz", "{i}/far.xyz", match="far.xyz.*too far"),
+    "score file of points too far": cli_case("score", "{i}/model.npz", "{i}/far.xyz", match="far.xyz.*too far"),
     "score NaN input": cli_case("score", "{i}/model.npz", "{i}/nan.xyz", match="nan.xyz.*NaN"),
     # ---- dgmm register
     "register NaN points": cli_case("register", "{i}/model.npz", "{i}/nan.xyz", match="NaN"),

@@ -1,4 +1,6 @@
 """EM streamed over blocks of primitives: bounded memory, threads, scikit-learn agreement, k-means at scale."""
+import functools
+import time
 import tracemalloc
 import warnings
 
@@ -14,16 +16,42 @@ from dgmm.em_blocks import BlockPass, block_rows
 FITTED = ("weights_", "means_", "covariances_", "precisions_cholesky_")
 
 
-def test_blocks_cover_the_rows_in_order_within_the_limit():
+def test_blocks_cover_the_rows_within_the_limit():
     with BlockPass(1000, 50, memory_limit=8 * 74 * 300, n_jobs=2) as blocks:
         assert block_rows(1000, 50, 8 * 74 * 300) == 300
         assert block_rows(1000, 50, 8 * 74 * 1000) == 1000  # fits: one block
         assert block_rows(10**7, 50, 2**30) == 2**23 // (8 * 74)  # streamed: 8 MiB blocks
         starts = [rows.start for rows in blocks.blocks]
         assert starts == [0, 300, 600, 900] and blocks.blocks[-1].stop == 1000
-        # sums in block order: the same as a plain sum of the row indices
-        total = blocks.run(lambda rows, out: np.arange(rows.start, rows.stop).sum(keepdims=True))
-    assert total[0] == 999 * 1000 // 2
+
+
+@pytest.mark.parametrize("n_jobs", [None, 2, 3])
+def test_block_sums_are_added_in_block_order_with_fresh_buffers_per_block(n_jobs):
+    """Float sums depend on their order: parts spanning 16 orders of magnitude, added in block order, must give
+    exactly the left-to-right sum, whatever the threads (the reverse order differs, so the test can tell). Each
+    call gets a (rows, n_components) buffer of its thread, reused across calls; a result written in it and
+    returned must survive until it is added, so a buffer shared between threads (or handed out twice before its
+    part is summed) fails."""
+    n_rows, n_components = 1000, 4
+    rng = np.random.default_rng(5)
+    values = rng.choice([-1.0, 1.0], size=(n_rows, n_components)) * 10.0 ** rng.uniform(-8, 8, (n_rows, n_components))
+    buffers = []
+
+    def part(rows, out):
+        assert out.shape == (rows.stop - rows.start, n_components)
+        out[:] = values[rows]
+        buffers.append(out.base if out.base is not None else out)
+        time.sleep(0.002)  # lets another thread run: it would overwrite a shared buffer here
+        return out.sum(axis=0)
+
+    with BlockPass(n_rows, n_components, memory_limit=8 * (n_components + 24) * 70, n_jobs=n_jobs) as blocks:
+        assert len(blocks.blocks) == 15
+        parts = [values[rows].sum(axis=0) for rows in blocks.blocks]
+        in_order = functools.reduce(np.add, parts)
+        assert not np.array_equal(in_order, functools.reduce(np.add, parts[::-1]))
+        for _ in range(2):  # a second run reuses the buffers
+            assert np.array_equal(blocks.run(part), in_order)
+    assert len({id(buffer) for buffer in buffers}) <= (n_jobs or 1)
 
 
 @pytest.mark.slow

@@ -61,15 +61,20 @@ def test_without_a_server_the_script_runs_in_its_own_process(tmp_path, monkeypat
 
 
 @pytest.mark.parametrize("body, code, stderr", [
-    ("raise ValueError('bad input')\n", 1, "ValueError: bad input"),
+    ("raise ValueError('bad input')\n", 1, "ValueError: bad input\n"),
     ("import sys\nsys.exit(3)\n", 3, ""),
-    ("import sys\nsys.exit('one line')\n", 1, "one line"),
+    ("import sys\nsys.exit('one line')\n", 1, "one line\n"),
+    ("import sys\nsys.exit()\n", 0, ""),
 ])
 def test_the_exit_status_and_error_are_the_script_s(server, tmp_path, body, code, stderr):
+    """As Python itself: a traceback ending in the error, an exit message alone on stderr, silence otherwise."""
     run = subprocess.run([sys.executable, script(tmp_path, "job.py", body)], capture_output=True, text=True,
                          timeout=60)
     assert run.returncode == code
-    assert stderr in run.stderr
+    if stderr:
+        assert run.stderr.endswith(stderr)
+    else:
+        assert run.stderr == ""
 
 
 @pytest.mark.parametrize("how", ["interrupt", "kill"])
@@ -99,3 +104,88 @@ def test_script_imports_lists_absolute_imports_once_in_order(tmp_path):
     (tmp_path / "a.py").write_text('"""doc"""\nimport sys\nfrom dgmm.data import load_mesh\nfrom . import x\n')
     (tmp_path / "b.py").write_text("import numpy as np, sys\nfrom dgmm.data import save_ply\n")
     assert script_imports([tmp_path / "a.py", tmp_path / "b.py"]) == ["sys", "dgmm.data", "numpy"]
+
+
+def started_job(tmp_path, body, name="job.py", setup=""):
+    """Start a job script that runs ``setup``, prints its pid, then runs ``body``; returns (client, fork pid)."""
+    job = script(tmp_path, name, "import os, signal, sys, time\n" + setup + "print(os.getpid(), flush=True)\n" + body)
+    client = subprocess.Popen([sys.executable, job], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    return client, int(client.stdout.readline())
+
+
+def finish(client, timeout=10):
+    """Wait for a client; return (exit status, rest of stdout, stderr), read once its fork has closed them too."""
+    code = client.wait(timeout=timeout)
+    with client.stdout, client.stderr:
+        return code, client.stdout.read(), client.stderr.read()
+
+
+def wait_dead(pid, seconds=5):
+    deadline = time.monotonic() + seconds
+    while alive(pid) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    return not alive(pid)
+
+
+@pytest.mark.parametrize("number", [signal.SIGTERM, signal.SIGHUP])
+def test_termination_signals_reach_the_fork_as_themselves(server, tmp_path, number):
+    """Snakemake cancels a job with SIGTERM (a closed terminal sends SIGHUP): the fork must get that very signal.
+    Its handler here prints the number and exits 7, which must be the client's status. Without forwarding, the
+    client dies of the signal itself (status -n) and the server's fallback sends the fork SIGTERM (tried)."""
+    client, fork = started_job(tmp_path, "time.sleep(60)\n", setup="signal.signal(signal.%s, lambda n, f: "
+                               "(print('got', n), sys.exit(7)))\n" % signal.Signals(number).name)
+    client.send_signal(number)
+    code, out, _ = finish(client)
+    assert (code, out) == (7, f"got {int(number)}\n")
+    assert wait_dead(fork)
+
+
+@pytest.mark.parametrize("number", [signal.SIGTERM, signal.SIGHUP])
+def test_a_job_killed_by_a_termination_signal_kills_its_client_with_it(server, tmp_path, number):
+    client, fork = started_job(tmp_path, "time.sleep(60)\n")
+    client.send_signal(number)
+    code, _, _ = finish(client)
+    assert code == -number
+    assert wait_dead(fork)
+
+
+def test_a_server_that_dies_under_a_job_fails_the_job_and_ends_the_fork(server, tmp_path):
+    """The job did not finish, so its client must fail (status 1), never succeed; and the fork, orphaned, must not
+    go on writing the job's outputs after Snakemake has counted it failed."""
+    client, fork = started_job(tmp_path, "time.sleep(60)\n")
+    server._process.kill()
+    assert client.wait(timeout=10) == 1
+    assert wait_dead(fork)
+    finish(client)  # closes the pipes
+
+
+def test_two_jobs_run_at_once_each_with_its_own_streams_and_status(server, tmp_path):
+    """Job A waits for a file that job B writes, so they must run concurrently; each client gets its own output and
+    exit status (a server that ran jobs one at a time, or mixed up their connections, fails)."""
+    flag = tmp_path / "b-started"
+    a, _ = started_job(tmp_path, f"import pathlib\nflag = pathlib.Path({str(flag)!r})\n"
+                                 "deadline = time.monotonic() + 20\n"
+                                 "while not flag.exists() and time.monotonic() < deadline:\n    time.sleep(0.01)\n"
+                                 "print('a saw b' if flag.exists() else 'a alone')\nsys.exit(3)\n", "a.py")
+    b, _ = started_job(tmp_path, f"import pathlib\npathlib.Path({str(flag)!r}).touch()\nprint('b done')\n"
+                                 "sys.exit(4)\n", "b.py")
+    assert finish(b, 30)[:2] == (4, "b done\n")
+    assert finish(a, 30)[:2] == (3, "a saw b\n")
+
+
+def test_jobs_run_with_one_blas_thread_whatever_their_environment(server, tmp_path):
+    """The server imports numpy with BLAS and OpenMP at one thread, as a one-thread job has them; its forks keep
+    that pool even when the client's environment asks for nothing (a server started without the one-thread
+    environment gives the machine's core count on a multi-core machine: tried on 2 cores)."""
+    server.stop()
+    (tmp_path / "probe.py").write_text("import numpy\n")
+    server = JobServer(["probe", "threadpoolctl"]).start()
+    try:
+        env = {name: value for name, value in os.environ.items() if not name.endswith("_NUM_THREADS")}
+        job = script(tmp_path, "threads.py", "from threadpoolctl import threadpool_info\n"
+                                             "print(sorted({p['num_threads'] for p in threadpool_info()"
+                                             " if p['user_api'] == 'blas'}))\n")
+        run = subprocess.run([sys.executable, job], env=env, capture_output=True, text=True, timeout=60)
+        assert (run.returncode, run.stdout) == (0, "[1]\n"), run.stderr
+    finally:
+        server.stop()

@@ -196,15 +196,23 @@ def test_ate_equals_evo(tmp_path):
 
 
 # ------------------------------------------------------------------------------------------------- odometry
+def positions_spread(translations):
+    """RMS distance of positions from their centroid: the ATE of standing still, and ``|1 − s|`` times it the ATE of
+    the trajectory scaled by ``s`` (after a rigid alignment, which for a scaled copy is the identity about the
+    centroid: the cross-covariance ``s Σ (p − c)(p − c)ᵀ`` is symmetric positive semi-definite)."""
+    return float(np.sqrt(np.mean(np.sum((translations - translations.mean(axis=0)) ** 2, axis=1))))
+
+
 @pytest.mark.slow
-@pytest.mark.parametrize("method, warm_iter", [("gmm-pixels", None), ("gmm-pixels", 5), ("gmm-points", None),
-                                               ("icp", None)])
-def test_odometry_on_synthetic_sequence(sequence, method, warm_iter):
+@pytest.mark.parametrize("method, warm_iter, scale_error", [("gmm-pixels", None, 0.02), ("gmm-pixels", 5, 0.02),
+                                                            ("gmm-points", None, 0.02), ("icp", None, 0.15)])
+def test_odometry_on_synthetic_sequence(sequence, method, warm_iter, scale_error):
     """Frame-to-frame odometry over every other frame of the 16 (8 frames at 15 Hz, 0.5 s; halves the test time).
 
-    Bound: 5% of the distance travelled. The paper's own GMM result on fr3/long_office_household is an ATE of
-    0.878 m over its 21.455 m path (TUM's figure), 4.1%; on a 0.5 s clip of a clean scene any working method is
-    well inside that. A method must also beat standing still (the identity trajectory) by a factor of four.
+    Bound: the ATE of the ground truth scaled by ``1 − scale_error``, ``scale_error`` times the ATE of standing
+    still (60 mm here): 1.2 mm for the GMMs (measured 0.47-0.76 mm), 9.0 mm for ICP on 2,500 random points per
+    frame (5.5 mm). A method that gets the motion's length 15% (GMMs: 2%) wrong fails. (The former bound, 5% of
+    the path, 9 mm, let a GMM odometry 15% short pass.)
     """
     frames = np.arange(0, N_FRAMES, 2)
     groundtruth = sequence.groundtruth_at_frames()[1].subset(frames)
@@ -213,15 +221,12 @@ def test_odometry_on_synthetic_sequence(sequence, method, warm_iter):
     with threadpool_limits(1):
         result = run_odometry(sequence, method, frames, warm_iter=warm_iter, seed=0, callback=logged.append)
     error = absolute_trajectory_error(result.trajectory, sequence.groundtruth)
-    still = Trajectory(groundtruth.timestamps, np.broadcast_to(np.eye(3), (len(frames), 3, 3)),
-                       np.zeros((len(frames), 3)))
-    standing_still = absolute_trajectory_error(still, sequence.groundtruth).rmse
+    standing_still = positions_spread(groundtruth.translations)
     print(f"\n{method} (warm_iter {warm_iter}): ATE RMSE {1000 * error.rmse:.2f} mm over {path_length:.3f} m "
           f"(standing still {1000 * standing_still:.1f} mm); per frame: model {result.prepare_seconds.mean():.3f} s, "
           f"registration {result.registration_seconds.mean():.3f} s")
     assert len(error.errors) == len(frames)
-    assert error.rmse < 0.05 * path_length
-    assert error.rmse < 0.25 * standing_still
+    assert error.rmse < scale_error * standing_still
     assert [frame.index for frame in logged] == frames.tolist()
     np.testing.assert_allclose(logged[-1].translation, result.trajectory.translations[-1])
     assert logged[0].registration is None and len(result.registration_seconds) == len(frames) - 1

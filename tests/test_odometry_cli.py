@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
+from tests.test_odometry import positions_spread
 from tests.test_odometry_metrics import FR1_XYZ, needs_fr1
 from tests.test_recording import read_blueprint, read_rrd
 
@@ -50,7 +51,11 @@ def test_fr1_xyz_trajectory_and_metrics_equal_evo(tmp_path):
     ape.process_data((ref, est))
     assert result["ate_rmse_m"] == pytest.approx(ape.get_statistic(metrics.StatisticsType.rmse), rel=1e-6)
     assert result["rpe_translation_m_s"] == pytest.approx(rpe.get_statistic(metrics.StatisticsType.rmse), rel=1e-6)
-    assert result["ate_rmse_m"] < 0.05 and 0 < result["rpe_rotation_deg_s"] < 10
+    # The ground truth scaled by 0.9 scores 0.1 times the positions' RMS spread (127 mm, standing still), 12.7 mm
+    # (see tests.test_odometry.positions_spread); ICP's ATE on these 40 frames is 10.8 mm, and 16.1 mm with every
+    # relative translation 15% short (tried). The former bound, 50 mm, let ICP 30% short (34.6 mm) pass.
+    assert result["ate_rmse_m"] < 0.1 * positions_spread(ref.positions_xyz)
+    assert 0 < result["rpe_rotation_deg_s"] < 10
 
 
 def small_sequence(folder, n_frames=3, shape=(480, 640), groundtruth=True):

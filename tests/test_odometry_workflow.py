@@ -69,6 +69,7 @@ def test_every_output_exists(stage):
     assert not list(stage.rglob("*.part")) and not list(stage.rglob("*.tmp"))
 
 
+@pytest.mark.slow
 def test_table_is_the_one_recorded_before_the_sweep_s_overhead_was_cut(stage):
     assert sha256(stage / "tables" / "odometry.csv") == TABLE_SHA256["odometry.csv"]
 

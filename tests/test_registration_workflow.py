@@ -113,15 +113,13 @@ def test_table_bytes_are_the_recorded_ones(workdir):
     assert sha256(path) == TABLE_SHA256["registration.csv"]
 
 
-def test_errors_are_in_the_papers_range(table):
-    """Paper Fig 5 (bunny, 250 trials): every method's mean rotation error is below 3° and translation error
-    below 1.1% of the diagonal; with a few trials, each method's median must be in that range."""
-    groups = defaultdict(list)
+def test_every_trial_ends_in_the_papers_range(table):
+    """Paper Fig 5 (bunny, 250 trials): every method's mean rotation error is below 3 deg and translation error
+    below 1.1% of the diagonal. Each trial, not a median (which two diverging trials of four pass), must end in
+    that range: here every method's worst trial is within 2.7 deg and 0.65%. A trial that diverges fails, and so
+    does one that removes only two thirds of its motion (tried on trial 1, which starts 9 deg away: 3.02 deg)."""
     for row in table:
-        groups[row["method"]].append((float(row["rotation_error_deg"]), float(row["translation_error_pct"])))
-    for method, errors in groups.items():
-        rotation, translation = np.median(errors, axis=0)
-        assert rotation < 3.0 and translation < 1.1, method
+        assert float(row["rotation_error_deg"]) < 3.0 and float(row["translation_error_pct"]) < 1.1, row
 
 
 def test_methods_see_identical_trials_within_the_protocol(workdir):

@@ -109,7 +109,7 @@ def snakemake(workdir, config, *options, env=None):
 
 
 def on_slurm(workdir, config, env):
-    """`snakemake --profile profiles/slurm` as the README runs it, checking job states every few seconds.
+    """`snakemake --profile profiles/slurm` as docs/user_guide/slurm.md runs it, checking job states every few seconds.
 
     Parameters
     ----------

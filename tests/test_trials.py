@@ -57,17 +57,27 @@ def test_methods_table_names_the_papers_methods_and_their_coarse_to_fine_p2d():
 
 @pytest.mark.slow
 def test_every_method_undoes_small_trials_on_a_dense_target():
-    """With source and target from the same dense sample, every method recovers the pose to within the spacing."""
+    """With source and target drawn from the same dense sample, every method removes most of each trial's motion.
+
+    The trials start 4.3 and 5.2 deg and 1.7 and 3.6 % of the diagonal away. Each method must leave less than a
+    fraction of that start: P2D on the K=20 mixture a tenth (it leaves 0.07 and 0.06), ICP and CPD on 300 of 3000
+    points 0.45 (they leave up to 0.42 in rotation, 0.39 in translation). A method that removes only a third or a
+    half of the motion (tried: 2.9 and 3.4 deg, 1.2 and 2.4 %; it passed the former bounds of 3 deg and 2 %) fails.
+    """
     dense = sphere_points(3000, seed=1)
     diagonal = bounding_diagonal(dense)
     setups = make_trials(dense, 300, range(2), root_seed=0, key="sphere", diagonal=diagonal, max_angle_deg=5.0,
                          max_translation=0.01)
+    start = {setup.index: (Rotation.from_matrix(setup.trial.rotation).magnitude() * 180 / np.pi,
+                           100 * np.linalg.norm(setup.trial.translation) / diagonal) for setup in setups}
     mixture = GaussianMixture(20, random_state=0, max_iter=100, tol=1e-6).fit(dense)
-    for method in ("points-kmeans", "icp", "cpd"):
+    for method, fraction in (("points-kmeans", 0.1), ("icp", 0.45), ("cpd", 0.45)):
         rows, seconds = run_trials(method, setups, diagonal, mixture=mixture)
         assert [row["trial"] for row in rows] == [0, 1] and len(seconds) == 2
         for row in rows:
-            assert row["rotation_error_deg"] < 3.0 and row["translation_error_pct"] < 2.0, (method, row)
+            start_angle, start_translation = start[row["trial"]]
+            assert row["rotation_error_deg"] < fraction * start_angle, (method, row)
+            assert row["translation_error_pct"] < fraction * start_translation, (method, row)
 
 
 def test_bad_method_or_missing_mixture_is_an_input_error():

@@ -1,15 +1,19 @@
 """The rule files as Snakemake's catalogue expects: `snakemake --lint` asks for nothing but a conda environment or
-container per rule (answered in the README: software is deployed by pip into .venv), `snakefmt --check` passes."""
+container per rule (answered in docs/user_guide/workflow.md: software is deployed by pip into .venv), `snakefmt --check`
+passes."""
 import re
 import subprocess
 import sys
 from pathlib import Path
+
+import pytest
 
 from tests.workflow import REPO, SNAKEMAKE
 
 CONDA_LINT = "Specify a conda environment or container for each rule."
 
 
+@pytest.mark.slow  # runs Snakemake (7 s): make check runs none
 def test_lint_asks_only_for_conda_environments(tmp_path):
     command = [str(SNAKEMAKE), "--snakefile", str(REPO / "Snakefile"), "--directory", str(tmp_path),
                "--configfile", str(REPO / "config.yaml"), "--lint"]

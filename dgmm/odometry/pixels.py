@@ -68,7 +68,7 @@ FR3 = CAMERAS["fr3"]
 
 SEQUENCE_CAMERAS = {"1": "ros", "2": "ros", "3": "fr3"}
 """TUM's ``rgbd_dataset_freiburgN_*`` -> the default intrinsics (``CAMERAS`` key) for its depth images: the ROS
-default for freiburg 1 and 2 (TUM's advice for their pre-registered depth; README, "Visual odometry", measures it
+default for freiburg 1 and 2 (TUM's advice for their pre-registered depth; docs/user_guide/odometry.md measures it
 against the fr1 calibration), the calibration for freiburg 3."""
 
 

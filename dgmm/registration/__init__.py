@@ -8,7 +8,8 @@ The public namespace; one concept per module:
 - :mod:`~dgmm.registration.fitted`: a fitted mixture checked once, with its pose-independent caches;
 - :mod:`~dgmm.registration.p2d` and :mod:`~dgmm.registration.d2d`: the two GMM costs and their registrations;
 - :mod:`~dgmm.registration.solvers`: the paper's BFGS and a damped Gauss-Newton on the 6-dof pose;
-- :mod:`~dgmm.registration.pointsets`: Kabsch, the authors' both-ways ICP, CPD through pycpd.
+- :mod:`~dgmm.registration.pointsets`: Kabsch and the authors' both-ways ICP;
+- :mod:`~dgmm.registration.cpd`: rigid Coherent Point Drift, pycpd's algorithm operation for operation.
 
 Conventions, shared by every function here:
 
@@ -20,10 +21,11 @@ Conventions, shared by every function here:
 - The optimisers rotate about a fixed centre ``c`` (the centroid of the source) so that rotation and translation
   are well decoupled: ``x -> R (x - c) + c + t'``. Results are converted back to the global ``(R, t)``.
 """
+from dgmm.registration.cpd import register_cpd
 from dgmm.registration.d2d import register_d2d
 from dgmm.registration.fitted import FittedMixture
 from dgmm.registration.p2d import register_p2d
-from dgmm.registration.pointsets import kabsch, register_cpd, register_icp
+from dgmm.registration.pointsets import kabsch, register_icp
 from dgmm.registration.pose import Registration
 from dgmm.registration.protocol import BUNNY_DIAGONAL, RigidTrial, random_trials, registration_errors
 from dgmm.registration.rotations import (euler_to_matrix, matrix_to_quaternion, matrix_to_rotvec,

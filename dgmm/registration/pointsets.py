@@ -1,4 +1,4 @@
-"""Point-set registration baselines: Kabsch, the authors' both-ways point-to-point ICP, and CPD through pycpd."""
+"""Point-set registration baselines: Kabsch and the authors' both-ways point-to-point ICP (CPD: :mod:`.cpd`)."""
 from __future__ import annotations
 
 import time
@@ -94,43 +94,3 @@ def register_icp(source, target, max_iter=50_000, tol=1e-9, callback=None):
     return Registration(rotation, translation, iteration, time.perf_counter() - start, float(error), converged,
                         "icp")
 
-
-def register_cpd(source, target, max_iter=150, tol=1e-9, callback=None):
-    """Rigid Coherent Point Drift through pycpd, moving ``source`` onto ``target``.
-
-    pycpd's rigid model also fits a scale; like the authors, the rigid part is read back as the Kabsch fit of
-    the source to pycpd's moved source.
-
-    Parameters
-    ----------
-    source : array-like of shape (n_source, 3)
-        pycpd's ``Y`` (the moving GMM centroids).
-    target : array-like of shape (n_target, 3)
-        pycpd's ``X``.
-    max_iter : int, default=150
-    tol : float, default=1e-9
-    callback : callable, optional
-        ``callback(iteration, registration)`` after every EM iteration with the current rigid part.
-
-    Returns
-    -------
-    Registration
-        ``objective`` is pycpd's final ``q``.
-    """
-    from pycpd import RigidRegistration
-
-    source, target = as_points("source", source), as_points("target", target)
-    if int(max_iter) < 1 or not tol >= 0:
-        raise InputError(f"max_iter must be >= 1 and tol >= 0, got {max_iter} and {tol}")
-    start = time.perf_counter()
-    cpd = RigidRegistration(X=target, Y=source, max_iterations=max_iter, tolerance=tol)
-
-    def report(iteration, error, X, Y):
-        rotation, translation = kabsch(source, Y)
-        callback(iteration, Registration(rotation, translation, iteration, time.perf_counter() - start,
-                                         float(error), False, "cpd"))
-
-    moved, _ = cpd.register(None if callback is None else report)
-    rotation, translation = kabsch(source, moved)
-    return Registration(rotation, translation, int(cpd.iteration), time.perf_counter() - start, float(cpd.q),
-                        bool(cpd.diff <= tol), "cpd")

@@ -32,7 +32,7 @@ class Registration:
         Wall-clock time of the registration.
     objective : float
         Final value of the method's minimised cost: negative mean log-likelihood (P2D), the determinant-free
-        D2D cost, mean matching distance (ICP), pycpd's objective ``q`` (CPD).
+        D2D cost, mean matching distance (ICP), CPD's objective ``q`` (pycpd's).
     converged : bool
         Whether the method's own stopping test was met before its iteration cap.
     method : str

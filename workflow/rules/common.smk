@@ -1,7 +1,7 @@
 # Config validation, the paths every stage shares and the input functions of the rules (Snakemake's catalogue
 # layout: the stage files hold rules only, the functions they call live here).
 # Every job declares resources (mem_mb, runtime in minutes, cpus_per_task) for cluster schedulers: measured peaks
-# (benchmarks/job_resources.py, README "Running on a Slurm cluster") with about 2x memory and 15x time headroom.
+# (benchmarks/job_resources.py, docs/user_guide/slurm.md) with about 2x memory and 15x time headroom.
 import os
 
 from snakemake.utils import validate
@@ -26,6 +26,18 @@ CHECKS = config.get("checks", {})
 SYNTHETIC_SEQUENCE = f"{ODO_DIR}/synthetic/sequence"
 REPORT_DIR = config.get("report", {}).get("dir", "reports")
 PICTURE_BUDGET = 1000  # Fig 7 shows the paper's 1000-primitive decimations and samples
+# Rule priorities: of the jobs ready to run, Snakemake starts those of highest priority first. First the jobs every
+# other waits on (the data stage), then the longest (odometry), then the others, roughly longest first, so that the
+# sweep does not end with one core on a long job while the other idles (benchmarks/sweep_profile.py counts the idle
+# core-seconds). Rules not listed have priority 0 (fits, the tables, the report).
+PRIORITY = {
+    "data": 40,  # data_mesh, data_eval, data_reduce: seconds each, and every fit and registration waits on them
+    "odometry_synthetic": 30,  # a long job (44 s at 5ab1484), and the runs on the synthetic sequence wait on it
+    "odometry_run": 20,
+    "registration_gmm": 10,  # its method's chunks wait on it
+    "registration_chunk": 5,
+    "fig2": 5,
+}
 
 
 def get_final_output():

@@ -27,6 +27,7 @@ rule data_mesh:
         f"{RESULTS}/benchmarks/data_mesh/{{model}}/{{mesh}}.tsv"
     wildcard_constraints:
         **DATA_WILDCARDS,
+    priority: PRIORITY["data"]
     threads: 1
     resources:
         mem_mb=500,
@@ -51,6 +52,7 @@ rule data_eval:
         f"{RESULTS}/benchmarks/data_eval/{{model}}/{{mesh}}.tsv"
     wildcard_constraints:
         **DATA_WILDCARDS,
+    priority: PRIORITY["data"]
     threads: 1
     resources:
         mem_mb=1000,
@@ -74,6 +76,7 @@ rule data_reduce:
         f"{RESULTS}/benchmarks/data_reduce/{{model}}/{{method}}{{budget}}.tsv"
     wildcard_constraints:
         **DATA_WILDCARDS,
+    priority: PRIORITY["data"]
     threads: 1
     resources:
         mem_mb=1000,

@@ -36,6 +36,7 @@ rule fig2:
         f"{RESULTS}/logs/fig2.log",
     benchmark:
         f"{RESULTS}/benchmarks/fig2.tsv"
+    priority: PRIORITY["fig2"]
     threads: 1
     resources:
         mem_mb=1000,

@@ -23,6 +23,7 @@ rule odometry_synthetic:
         f"{RESULTS}/logs/odometry/synthetic.log",
     benchmark:
         f"{RESULTS}/benchmarks/odometry_synthetic.tsv"
+    priority: PRIORITY["odometry_synthetic"]
     threads: 1
     resources:
         mem_mb=1000,
@@ -51,6 +52,7 @@ rule odometry_run:
     wildcard_constraints:
         sequence="|".join(map(re.escape, ODO_SEQUENCES)),
         run="|".join(map(re.escape, ODO_RUNS)),
+    priority: PRIORITY["odometry_run"]
     threads: 1
     resources:
         mem_mb=1500,

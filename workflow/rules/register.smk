@@ -38,6 +38,7 @@ rule registration_gmm:
         f"{RESULTS}/benchmarks/registration_gmm/{{model}}/{{mesh}}/{{protocol}}/{{variant}}/{{method}}.tsv"
     wildcard_constraints:
         **REG_WILDCARDS,
+    priority: PRIORITY["registration_gmm"]
     threads: 1
     params:
         seed=config["seed"],
@@ -62,6 +63,7 @@ rule registration_chunk:
         f"{RESULTS}/benchmarks/registration_chunk/{{model}}/{{mesh}}/{{protocol}}/{{variant}}/{{method}}/c{{chunk}}.tsv"
     wildcard_constraints:
         **REG_WILDCARDS,
+    priority: PRIORITY["registration_chunk"]
     threads: 1
     params:
         seed=config["seed"],
