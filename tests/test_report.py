@@ -205,9 +205,6 @@ def synthetic_results(results):
         for name, value in (("exact", 8.0 - m), ("vertices", 7.0 - m)):
             rows.append(ll_row(model, f"{table1_mesh(model)}-{name}", 100, "kmeans", "textbook", 0, value))
     write_csv(results / "tables" / "likelihood.csv", rows)
-    write_csv(results / "tables" / "fit_seconds.csv", [{key: row[key] for key in ("model", "input", "K", "init",
-                                                                                 "variant", "seed")}
-                                                       | {"fit_seconds": 0.1} for row in rows])
     write_csv(results / "tables" / "fig2.csv", [{k: row[k] for k in row} for row in FIG2_ROWS])
     reg = []
     for method in ("mesh-kmeans", "mesh-random", "points-kmeans", "points-random", "mesh-kmeans-c2f", "icp", "cpd"):

@@ -25,7 +25,6 @@ INPUTS = {
     "registration": "the registration stage (config section `registration`)",
     "odometry": "the odometry stage's odometry.csv (config section `odometry`)",
     "fig6": "the odometry stage's trajectory figure (config section `odometry`)",
-    "fit_seconds": "the fitting sweep's fit_seconds.csv",
     "registration_seconds": "the registration stage's registration_seconds.csv",
     "odometry_seconds": "the odometry stage's odometry_seconds.csv",
     "convergence": "the convergence check's convergence.csv (config section `checks.convergence`)",

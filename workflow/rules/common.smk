@@ -248,7 +248,6 @@ def report_inputs():
         inputs["registration"] = rules.registration_table.output.errors
     if "registration" in config:
         inputs["registration_seconds"] = rules.registration_table.output.seconds
-    inputs["fit_seconds"] = rules.likelihood_table.output.seconds
     if "odometry" in config:
         inputs.update(
             odometry=f"{RESULTS}/tables/odometry.csv",

@@ -7,7 +7,6 @@ from dgmm.report import tables
 TABLES = {
     # field: the table (under results/tables/) it holds as rows of strings
     "likelihood": "likelihood.csv",
-    "fit_seconds": "fit_seconds.csv",
     "fig2": "fig2.csv",
     "registration": "registration.csv",
     "registration_seconds": "registration_seconds.csv",
@@ -26,7 +25,6 @@ class Measurements:
     """Rows of every table of ``TABLES`` (None: not configured), with the summaries several claims share."""
 
     likelihood: list = None
-    fit_seconds: list = None
     fig2: list = None
     registration: list = None
     registration_seconds: list = None
