@@ -21,6 +21,12 @@ def _runs(rows, variant, column):
     return runs
 
 
+def _schedule(rows):
+    """`` (per-frame schedule: ...)`` when the table names the GMM runs' schedule (odometry.schedule), else ""."""
+    names = sorted({row["schedule"] for row in rows or [] if row.get("schedule")})
+    return f" (per-frame schedule: {', '.join(names)})" if names else ""
+
+
 def _missing(rows):
     return [f"{row['sequence']} (folder {row['missing_folder']} missing)" for row in rows or []
             if not row.get("method")]
@@ -55,7 +61,7 @@ def pixels_beat_points(data):
         grades[variant] = Grade(share_verdict(wins, len(runs)), f"{wins}/{len(runs)} sequences ({gains})",
                                 lost(failed))
     absent = _missing(data.odometry)
-    return Claim(section, title, rule, "ATE RMSE, " + " — ".join(lines) + "."
+    return Claim(section, title, rule, f"ATE RMSE{_schedule(data.odometry)}, " + " — ".join(lines) + "."
                  + (f" Pending: {'; '.join(absent)}." if absent else ""), grades, published)
 
 
@@ -117,7 +123,8 @@ def _timing_ratio(data, section, title, rule, methods, column, reproduced, partl
                                 f"Mean {column.replace('_', ' ')}: " + "; ".join(
                                     f"{s} {r[methods[0]] * 1000:.3g} vs {r[methods[1]] * 1000:.3g} ms"
                                     for s, r in runs.items()) + ".")
-    return Claim(section, title, rule, f"{methods[0]} / {methods[1]}: " + "; ".join(lines) + ".", grades,
+    return Claim(section, title, rule, f"{methods[0]} / {methods[1]}{_schedule(data.odometry_seconds)}: "
+                 + "; ".join(lines) + ".", grades,
                  paper_words, machine_dependent=True)
 
 
