@@ -24,10 +24,10 @@ sequence = read_sequence(smk.input.sequence)
 frames, groundtruth = first_frames(sequence, p.frames)
 seed = job_seed(p.seed, f"odometry/{w.sequence}/{w.run}", 0)
 intrinsics = parse_intrinsics(camera)
-options = dict(intrinsics=intrinsics, n_components=p.components, max_iter=p.max_iter, warm_iter=p.warm_iter or None,
+options = dict(intrinsics=intrinsics, n_components=p.components, schedule=p.schedule, warm_iter=p.warm_iter or None,
                variant=variant, size=p.pixel_size, n_icp_points=p.icp_points, seed=seed)
 params = dict(sequence=w.sequence, folder=str(smk.input.sequence), method=method, variant=variant,
-              intrinsics=camera, frames=len(frames), n_components=p.components, max_iter=p.max_iter,
+              intrinsics=camera, frames=len(frames), n_components=p.components, schedule=p.schedule,
               warm_iter=p.warm_iter, size=p.pixel_size, n_icp_points=p.icp_points, seed=seed, root_seed=p.seed)
 
 with threadpool_limits(smk.threads), OdometryRecorder(out.mcap, out.rrd, params=params, groundtruth=groundtruth,
