@@ -97,8 +97,8 @@ def run_odometry(sequence, method, frames=None, *, intrinsics=FR3, n_components=
         How each frame's GMM starts and iterates and which D2D solver registers it: a key of
         ``dgmm.odometry.frame_model.SCHEDULES`` or a ``Schedule``.
     warm_iter : int, optional
-        EM iterations of every frame after the first, started from the previous frame's mixture; None (the
-        paper's protocol) fits every frame from its own k-means start.
+        EM iterations of every frame after the first, started from the previous frame's mixture; None fits every
+        frame from its own start, by ``schedule``.
     variant : {"textbook", "authors"}
         The EM (``dgmm.GaussianMixture``'s ``variant``).
     size : {"area", "unit"}
