@@ -3,10 +3,11 @@
 On one BLAS thread (as the workflow's jobs run), over the first N depth frames of a TUM sequence (fr1/xyz from the
 mirror by default, all 798 frames): each method and EM variant under each schedule, a name of
 ``dgmm.odometry.frame_model.SCHEDULES`` or ``SEED_SAMPLE:LLOYD_ITER:EM_ITER:SOLVER`` (a ``Schedule``; SEED_SAMPLE
-``all`` for scikit-learn's k-means on every primitive). Prints one markdown row per run: ATE RMSE, the one-second RPE, CPU seconds per frame (fit + D2D;
-the machine may be shared, so CPU time, not wall time) and the worst frame-to-frame error against the ground truth.
+``all`` for scikit-learn's k-means on every primitive). Prints one markdown row per run: ATE RMSE, the one-second
+RPE, CPU seconds per frame (fit + D2D; the machine may be shared, so CPU time, not wall time) and the worst
+frame-to-frame error against the ground truth.
 
-Usage: ``python benchmarks/odometry_schedules.py [SEQUENCE_DIR] [--frames N] [--schedules reference default ...]
+Usage: ``python benchmarks/odometry_schedules.py [SEQUENCE_DIR] [--frames N] [--schedules fast reference ...]
 [--variants textbook authors] [--methods gmm-pixels]``.
 """
 import argparse
