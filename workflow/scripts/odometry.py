@@ -37,8 +37,8 @@ with threadpool_limits(smk.threads), OdometryRecorder(out.mcap, out.rrd, params=
 metrics = drift_metrics(result.trajectory, sequence.groundtruth)
 write_trajectory(out.trajectory, result.trajectory, header=f"dgmm {w.run} odometry of {w.sequence}, seed {seed}")
 job = dict(sequence=w.sequence, method=method, variant=variant if method != "icp" else "")
-schedule = p.schedule if method != "icp" else ""
-write_csv(out.ate, [{**job, "schedule": schedule, "frames": len(frames), **{k: "" if v is None else v for k, v in metrics.items()}}])
+metrics = {key: "" if value is None else value for key, value in metrics.items()}
+write_csv(out.ate, [{**job, "schedule": p.schedule if method != "icp" else "", "frames": len(frames), **metrics}])
 write_csv(out.seconds, [{**job, **row} for row in frame_seconds(result)])
 print(f"{w.sequence}/{w.run}: {len(frames)} frames, {metrics}, {result.cpu_seconds.mean():.3f} CPU s per frame",
       file=sys.stderr)
