@@ -402,9 +402,10 @@ def _odometry(args):
     frames, groundtruth = (first_frames(sequence, n_frames) if sequence.groundtruth is not None
                            else (range(n_frames), None))
     options = dict(intrinsics=parse_intrinsics(camera), variant=args.variant, seed=args.seed,
-                   warm_iter=args.warm_iter or None)
+                   schedule=args.schedule, warm_iter=args.warm_iter or None)
     params = {"dgmm_version": __version__, "sequence": name, "folder": str(args.sequence), "method": args.method,
-              "frames": n_frames, "intrinsics": camera, "variant": args.variant, "warm_iter": args.warm_iter,
+              "frames": n_frames, "intrinsics": camera, "variant": args.variant, "schedule": args.schedule,
+              "warm_iter": args.warm_iter,
               "seed": args.seed}
     with ExitStack() as stack:
         bar = stack.enter_context(_progress_bar(n_frames, desc="odometry", unit="frame"))
@@ -445,10 +446,14 @@ def _odometry_arguments(parser):
     parser.add_argument("--intrinsics", metavar="fr1|fr2|fr3|ros|FX,FY,CX,CY",
                         help="depth camera (default: from the folder name, rgbd_dataset_freiburgN_*: ros for "
                              "freiburg 1 and 2, fr3 for freiburg 3)")
+    parser.add_argument("--schedule", default="fast", metavar="fast|reference",
+                        help="every frame's EM start, EM iterations and D2D solver: fast (Lloyd's k-means from random "
+                             "primitives, few EM iterations, Gauss-Newton; the sweep's, chosen by measurement) or "
+                             "reference (k-means + 25 EM iterations, BFGS) (default: %(default)s)")
     parser.add_argument("--warm-iter", type=_seed, default=0, metavar="N",
                         help="EM iterations of every frame after the first, started from the previous frame's "
-                             "mixture; 0 fits every frame from k-means with 25 iterations, the paper's protocol "
-                             "(default: %(default)s; a warm start is ~4x faster and drifts more)")
+                             "mixture; 0 fits every frame by its schedule (default: %(default)s; a warm start "
+                             "drifts more)")
     parser.add_argument("--seed", type=_seed, default=0, metavar="S", help="random seed (default: %(default)s)")
     parser.add_argument("-o", "--output", type=_output_file, metavar="TRAJECTORY.txt",
                         help="write the estimated trajectory (TUM format, depth timestamps) to this file")

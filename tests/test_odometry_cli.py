@@ -129,3 +129,13 @@ def test_rrd_opens_on_its_blueprint(tmp_path):
     timeline, views = read_blueprint(tmp_path / "o.rrd")
     assert timeline == "frame" and set(views) == {"camera path", "current frame's model", "seconds per frame"}
     assert sorted(read_rrd(tmp_path / "o.rrd", "/world/camera/model")["frame"]) == [0, 1, 2]
+
+
+@pytest.mark.slow  # a dgmm subprocess
+def test_unknown_schedule_is_one_line_exit_2_and_no_output(tmp_path):
+    folder = small_sequence(tmp_path / "rgbd_dataset_freiburg3_small")
+    run = dgmm_odometry(folder, "--schedule", "fastest", "-o", tmp_path / "t.txt", "--rrd", tmp_path / "o.rrd")
+    assert run.returncode == 2, run.stderr
+    assert run.stdout == "" and run.stderr.count("\n") == 1
+    assert "schedule must be one of ['fast', 'reference']" in run.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == [folder.name]

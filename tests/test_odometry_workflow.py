@@ -77,15 +77,17 @@ def test_table_is_the_one_recorded_before_the_sweep_s_overhead_was_cut(stage):
 @pytest.mark.slow
 def test_table_has_every_run_with_finite_metrics_and_the_missing_sequence(stage):
     rows = read_csv(stage / "tables" / "odometry.csv")
-    assert list(rows[0]) == ["sequence", "method", "variant", "frames", "ate_rmse_m", "rpe_translation_m_s",
-                             "rpe_rotation_deg_s", "missing_folder"]
+    assert list(rows[0]) == ["sequence", "method", "variant", "schedule", "frames", "ate_rmse_m",
+                             "rpe_translation_m_s", "rpe_rotation_deg_s", "missing_folder"]
     *rows, pending = rows
     assert [(row["method"], row["variant"]) for row in rows] == list(RUNS.values())
+    assert [row["schedule"] for row in rows] == ["fast", "fast", ""]  # tests/config.yaml's; ICP has none
     for row in rows:
         assert row["sequence"] == "synthetic" and int(row["frames"]) == N_FRAMES and row["missing_folder"] == ""
         assert math.isfinite(float(row["ate_rmse_m"])) and float(row["ate_rmse_m"]) >= 0
         assert row["rpe_translation_m_s"] == row["rpe_rotation_deg_s"] == ""  # 8 frames span less than 1 s
-    assert pending == {"sequence": "rgbd_dataset_freiburg3_missing", "method": "", "variant": "", "frames": "",
+    assert pending == {"sequence": "rgbd_dataset_freiburg3_missing", "method": "", "variant": "", "schedule": "",
+                       "frames": "",
                        "ate_rmse_m": "", "rpe_translation_m_s": "", "rpe_rotation_deg_s": "",
                        "missing_folder": MISSING}
     seconds = read_csv(stage / "tables" / "odometry_seconds.csv")

@@ -3,9 +3,9 @@
 Drawn headless: a :class:`matplotlib.figure.Figure` built without pyplot (Agg canvas when saved), and
 :func:`save_png` writes it with no software or time metadata, so the same trajectories give the same bytes.
 Positions are in metres, in the ground truth's world frame, which is z-up for TUM's motion capture and for
-``dgmm.odometry.synthetic``: the top-down view is the x–y plane, with equal axes. Each estimate is first moved onto the
-ground truth by the rigid alignment of its ATE (``dgmm.odometry.metrics.absolute_trajectory_error``), as TUM's and evo's
-trajectory plots do.
+``dgmm.odometry.synthetic``: the top-down view is the x–y plane, with equal axes. Each estimate is first moved onto
+the ground truth by the rigid alignment of its ATE (``dgmm.odometry.metrics.absolute_trajectory_error``), as TUM's
+and evo's trajectory plots do.
 """
 from matplotlib.figure import Figure
 

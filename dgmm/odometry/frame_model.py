@@ -4,20 +4,34 @@ Methods: ``"gmm-pixels"`` fits a K-component GMM to per-pixel rectangle primitiv
 and registers with the determinant-free D2D cost; ``"gmm-points"`` does the same with the plain back-projected
 points; ``"icp"`` keeps 2,500 points drawn at random from each frame's back-projection for point-to-point ICP.
 
-EM start (``warm_iter``): the paper's protocol fits every frame from a k-means start (``max_iter`` iterations);
-with ``warm_iter`` set, every frame after the first starts from the previous frame's mixture (its starved
-components restarted on the data) and runs ``warm_iter`` iterations, several times cheaper since the camera moves
-little between frames, at a cost in drift (fr1/xyz, first 100 frames: ATE 0.037 m at 5 iterations against the
-protocol's 0.018 m).
+Schedules (:data:`SCHEDULES`): the paper does not state how each frame's EM starts or how long it runs, nor its
+odometry's solver, so the sweep's schedule is chosen by measurement (``benchmarks/odometry_schedules.py``) and the
+code before that choice is kept as ``"reference"``. Every frame's start is drawn from its own seed.
+
+Warm start (``warm_iter``): every frame after the first starts from the previous frame's mixture (its starved
+components restarted on the data) and runs ``warm_iter`` iterations. It under-measures the motion: a few EM
+iterations move a component only part of the way its data moved (EM's mean update lags along surfaces that extend
+past the component), so D2D between the previous mixture and its lagging successor sees part of the motion (fr1/xyz,
+20 pairs two frames apart: estimated on true translation slope 0.89 warm, 0.96 from each frame's own start), and
+the shortfall compounds into drift.
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
+from sklearn.cluster import kmeans_plusplus
 
 from dgmm.mixture import GaussianMixture
 from dgmm.odometry.pixels import backproject, pixel_primitives
 from dgmm.primitives import Primitives
 from dgmm.registration import register_d2d, register_icp
+from dgmm.variants import VARIANTS
+
+_ROWS, _COLS = np.array([0, 1, 2, 0, 0, 1]), np.array([0, 1, 2, 1, 2, 2])  # the 6 distinct entries of a 3x3
+_FULL = np.array([[0, 3, 4], [3, 1, 5], [4, 5, 2]])  # each entry of the full 3x3 in those 6
+REG_COVAR = 1e-6
+"""Every frame's mixture's ``reg_covar`` (``GaussianMixture``'s default)."""
 
 STARVED_WEIGHT = 0.1
 """Warm start: a component of the previous frame's mixture whose weight is below ``STARVED_WEIGHT / K`` restarts."""
@@ -44,17 +58,89 @@ def _warm_start(mixture, prims, rng):
     return weights, means, np.linalg.inv(covariances)
 
 
+@dataclass(frozen=True)
+class Schedule:
+    """How every frame's mixture is fitted and registered: its EM start, its EM iterations, the D2D solver.
+
+    Attributes
+    ----------
+    seed_sample : int or None
+        None: scikit-learn's k-means (k-means++ seeds, Lloyd to convergence) on every primitive, ``GaussianMixture``'s
+        own ``init="kmeans"``. An int: k-means++ seeds drawn from that many primitives picked at random, refined by
+        ``lloyd_iter`` Lloyd iterations on every primitive; the start is their hard-label M-step.
+    lloyd_iter : int
+        Lloyd iterations on every primitive after the seeds (unused when ``seed_sample`` is None).
+    em_iter : int
+        EM iterations from the start.
+    solver : {"bfgs", "gauss-newton"}
+        D2D's solver (``dgmm.registration.register_d2d``).
+    """
+
+    seed_sample: int | None
+    lloyd_iter: int
+    em_iter: int
+    solver: str
+
+
+SCHEDULES = {
+    "fast": Schedule(seed_sample=1024, lloyd_iter=3, em_iter=2, solver="gauss-newton"),
+    "reference": Schedule(seed_sample=None, lloyd_iter=0, em_iter=25, solver="bfgs"),
+}
+"""Named per-frame schedules. ``"reference"``: scikit-learn's k-means on every primitive, 25 EM iterations (the
+fitting experiments' count; the paper does not state the odometry's) and the paper's BFGS, the sweep's until the
+schedule was chosen by measurement. ``"fast"``, the sweep's default: k-means++ seeds from 1,024 primitives, 3 Lloyd
+iterations and 2 EM iterations on every primitive, Gauss-Newton D2D (benchmarks/odometry_schedules.py)."""
+
+
+def _lloyd_start(prims, n_components, schedule, variant, rng):
+    """Weights, means and precisions of the hard-label M-step after k-means++ seeds and Lloyd iterations.
+
+    The seeds are k-means++ (scikit-learn) on ``schedule.seed_sample`` primitives drawn at random, weighted by
+    their M-step weights; ``schedule.lloyd_iter`` Lloyd iterations then run on every primitive's mean with those
+    weights (a cluster left empty keeps its centre). Each component takes its cluster's weight, weighted mean and
+    covariance (the spread of the primitives' means plus their own covariances, ``REG_COVAR`` on the diagonal), as
+    ``GaussianMixture``'s k-means start does; an empty cluster gets the median covariance and a weight of
+    ``1e-3 / K``.
+    """
+    _, weights = VARIANTS[variant](prims.weights)
+    points = prims.means
+    sample = rng.choice(len(points), size=min(schedule.seed_sample, len(points)), replace=False)
+    centres, _ = kmeans_plusplus(points[sample], n_components, sample_weight=weights[sample],
+                                 random_state=int(rng.integers(np.iinfo(np.int32).max)))
+    for _ in range(schedule.lloyd_iter + 1):  # the last pass only labels
+        labels = (np.sum(centres ** 2, axis=1) - 2.0 * points @ centres.T).argmin(axis=1)
+        mass = np.bincount(labels, weights, minlength=n_components)
+        present = mass > 0
+        sums = np.stack([np.bincount(labels, weights * points[:, d], minlength=n_components) for d in range(3)], 1)
+        centres[present] = sums[present] / mass[present, None]
+    offsets = points - centres[labels]
+    moments = offsets[:, _ROWS] * offsets[:, _COLS] + prims.covariances[:, _ROWS, _COLS]
+    covariances = np.stack([np.bincount(labels, weights * moments[:, m], minlength=n_components)
+                            for m in range(6)], 1)[:, _FULL]
+    covariances[present] /= mass[present, None, None]
+    if not present.all():
+        covariances[~present] = np.median(covariances[present], axis=0)
+        mass[~present] = 1e-3 * mass.sum() / n_components
+    covariances += REG_COVAR * np.eye(3)
+    return mass / mass.sum(), centres, np.linalg.inv(covariances)
+
+
 def _fit_mixture(prims, rng, previous, options):
-    """The frame's K-component GMM: from a k-means start seeded by ``rng``, or from ``previous`` (warm start).
+    """The frame's K-component GMM: from its schedule's start seeded by ``rng``, or from ``previous`` (warm start).
 
     ``previous`` is the previous frame's mixture or ``None`` (see :func:`_warm_start`).
     """
-    common = dict(variant=options["variant"], random_state=rng)
-    if previous is None or options["warm_iter"] is None:
-        return GaussianMixture(options["n_components"], max_iter=options["max_iter"], **common).fit(prims)
-    weights, means, precisions = _warm_start(previous, prims, rng)
-    return GaussianMixture(options["n_components"], max_iter=options["warm_iter"], weights_init=weights,
-                           means_init=means, precisions_init=precisions, **common).fit(prims)
+    schedule, k = options["schedule"], options["n_components"]
+    common = dict(variant=options["variant"], random_state=rng, reg_covar=REG_COVAR)
+    if previous is not None and options["warm_iter"] is not None:
+        weights, means, precisions = _warm_start(previous, prims, rng)
+        return GaussianMixture(k, max_iter=options["warm_iter"], weights_init=weights, means_init=means,
+                               precisions_init=precisions, **common).fit(prims)
+    if schedule.seed_sample is None:
+        return GaussianMixture(k, max_iter=schedule.em_iter, **common).fit(prims)
+    weights, means, precisions = _lloyd_start(prims, k, schedule, options["variant"], rng)
+    return GaussianMixture(k, max_iter=schedule.em_iter, weights_init=weights, means_init=means,
+                           precisions_init=precisions, **common).fit(prims)
 
 
 def _prepare_pixels(depth, intrinsics, rng, previous, options):
@@ -70,15 +156,19 @@ def _prepare_icp(depth, intrinsics, rng, previous, options):
     return points[rng.choice(len(points), size=min(options["n_icp_points"], len(points)), replace=False)]
 
 
-def _register_icp(fixed, moving):
-    return register_icp(moving, fixed)
+def _register_d2d(fixed, moving, options):
+    return register_d2d(fixed, moving, solver=options["schedule"].solver)
+
+
+def _register_icp(fixed, moving, options):
+    return register_icp(moving, fixed, tol=options["icp_tol"])
 
 
 # method -> (prepare(depth, intrinsics, rng, previous model, options) -> frame model,
-#            register(fixed, moving) -> Registration)
+#            register(fixed, moving, options) -> Registration)
 METHODS = {
-    "gmm-pixels": (_prepare_pixels, register_d2d),
-    "gmm-points": (_prepare_points, register_d2d),
+    "gmm-pixels": (_prepare_pixels, _register_d2d),
+    "gmm-points": (_prepare_points, _register_d2d),
     "icp": (_prepare_icp, _register_icp),
 }
 

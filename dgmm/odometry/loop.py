@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from dgmm.errors import DataError, InputError
-from dgmm.odometry.frame_model import METHODS
+from dgmm.odometry.frame_model import METHODS, SCHEDULES, Schedule
 from dgmm.odometry.pixels import FR3
 from dgmm.odometry.tum import Trajectory
 from dgmm.registration import Registration
@@ -77,8 +77,8 @@ class Odometry:
     cpu_seconds: np.ndarray
 
 
-def run_odometry(sequence, method, frames=None, *, intrinsics=FR3, n_components=100, max_iter=25, warm_iter=None,
-                 variant="textbook", size="area", n_icp_points=2500, seed=0, callback=None):
+def run_odometry(sequence, method, frames=None, *, intrinsics=FR3, n_components=100, schedule="fast", warm_iter=None,
+                 variant="textbook", size="area", n_icp_points=2500, icp_tol=1e-9, seed=0, callback=None):
     """Frame-to-frame visual odometry over a TUM sequence (paper §V).
 
     Each frame's model is built once (a GMM, or ICP's random points) and registered onto the previous frame's
@@ -91,17 +91,22 @@ def run_odometry(sequence, method, frames=None, *, intrinsics=FR3, n_components=
     frames : array-like of int, optional
         Frame indices to use, in order (e.g. ``range(300)``); all frames when omitted.
     intrinsics : dgmm.odometry.pixels.Intrinsics, default=FR3
-    n_components, max_iter : int
-        GMM size and EM iterations from the k-means start (paper: K=100; 25 iterations).
+    n_components : int
+        GMM size (paper: K=100).
+    schedule : str or Schedule, default="fast"
+        How each frame's GMM starts and iterates and which D2D solver registers it: a key of
+        ``dgmm.odometry.frame_model.SCHEDULES`` or a ``Schedule``.
     warm_iter : int, optional
-        EM iterations of every frame after the first, started from the previous frame's mixture; None (the
-        paper's protocol) fits every frame from its own k-means start.
+        EM iterations of every frame after the first, started from the previous frame's mixture; None fits every
+        frame from its own start, by ``schedule``.
     variant : {"textbook", "authors"}
         The EM (``dgmm.GaussianMixture``'s ``variant``).
     size : {"area", "unit"}
         Pixel primitive size for ``"gmm-pixels"`` (see ``dgmm.odometry.pixels.pixel_primitives``).
     n_icp_points : int
         Points drawn per frame for ``"icp"`` (paper: 2,500).
+    icp_tol : float
+        ICP stops when the mean matching distance changes by less (metres; ``dgmm.registration.register_icp``).
     seed : int
         Frame ``k`` draws its k-means initialisation or ICP sample from ``np.random.default_rng([seed, k])``.
     callback : callable, optional
@@ -118,14 +123,17 @@ def run_odometry(sequence, method, frames=None, *, intrinsics=FR3, n_components=
     """
     if method not in METHODS:
         raise InputError(f"method must be one of {sorted(METHODS)}, got {method!r}")
+    if not isinstance(schedule, Schedule) and schedule not in SCHEDULES:
+        raise InputError(f"schedule must be one of {sorted(SCHEDULES)} or a Schedule, got {schedule!r}")
     if warm_iter is not None and warm_iter < 1:
         raise InputError(f"warm_iter must be a positive number of EM iterations or None, got {warm_iter!r}")
     indices = np.arange(len(sequence)) if frames is None else np.asarray(frames, dtype=int)
     if len(indices) < 2 or indices.min() < 0 or indices.max() >= len(sequence):
         raise InputError(f"odometry needs at least 2 frame indices in 0..{len(sequence) - 1}")
     prepare, register = METHODS[method]
-    options = {"n_components": n_components, "max_iter": max_iter, "warm_iter": warm_iter, "variant": variant,
-               "size": size, "n_icp_points": n_icp_points}
+    options = {"n_components": n_components, "warm_iter": warm_iter,
+               "schedule": schedule if isinstance(schedule, Schedule) else SCHEDULES[schedule], "variant": variant,
+               "size": size, "n_icp_points": n_icp_points, "icp_tol": icp_tol}
     rotations, translations = [np.eye(3)], [np.zeros(3)]
     previous, prepare_seconds, registrations, cpu_seconds = None, [], [], []
     for index in indices:  # sequential by nature: each pose composes the previous one
@@ -136,7 +144,7 @@ def run_odometry(sequence, method, frames=None, *, intrinsics=FR3, n_components=
         start, cpu_start = time.perf_counter(), time.process_time()
         model = prepare(depth, intrinsics, np.random.default_rng([seed, int(index)]), previous, options)
         prepare_seconds.append(time.perf_counter() - start)
-        registration = None if previous is None else register(previous, model)
+        registration = None if previous is None else register(previous, model, options)
         cpu_seconds.append(time.process_time() - cpu_start)
         if registration is not None:  # T_{k+1} = T_k (T_k⁻¹ T_{k+1})
             registrations.append(registration)

@@ -158,6 +158,25 @@ def handheld_trajectory(n_samples, seed=0, rate=GROUNDTRUTH_RATE, start=TUM_EPOC
     return Trajectory(start + times, rotations, position)
 
 
+def spinning_trajectory(n_samples, seed=0, rate=GROUNDTRUTH_RATE, start=TUM_EPOCH, peak_deg_s=90.0):
+    """A camera standing still in the room, looking at the table and shaken about its optical centre (:func:`spin`).
+
+    Parameters are those of :func:`handheld_trajectory`, and ``peak_deg_s`` the peak rate about each camera axis.
+
+    Returns
+    -------
+    Trajectory
+        ``n_samples`` rows, one position.
+    """
+    times = np.arange(n_samples) / rate
+    position, target = np.array([0.0, -1.1, 1.5]), np.array([0.0, 1.2, 0.7])
+    forward = (target - position) / np.linalg.norm(target - position)
+    right = np.cross(forward, [0.0, 0.0, 1.0])
+    right /= np.linalg.norm(right)
+    look_at = np.stack([right, np.cross(forward, right), forward], axis=1)
+    return Trajectory(start + times, look_at @ spin(times, peak_deg_s, seed), np.tile(position, (n_samples, 1)))
+
+
 def _triangle_groups(triangles, group_size=32, cell=0.1):
     """Indices of spatially coherent groups of at most ``group_size`` triangles.
 
@@ -280,7 +299,8 @@ def kinect_depth(depth, cosine, rng):
     return np.where(valid, measured, 0.0)
 
 
-def write_synthetic_sequence(folder, triangles, n_frames=300, seed=0, intrinsics=FR3, step=PIXEL_STEP):
+def write_synthetic_sequence(folder, triangles, n_frames=300, seed=0, intrinsics=FR3, step=PIXEL_STEP,
+                             path=handheld_trajectory):
     """Render a TUM-format sequence of ``triangles`` into ``folder`` (which must not exist yet).
 
     Files are written to a temporary folder beside ``folder`` and renamed at the end, so a failure leaves no
@@ -297,6 +317,9 @@ def write_synthetic_sequence(folder, triangles, n_frames=300, seed=0, intrinsics
     intrinsics : Intrinsics
     step : int
         Render every ``step``-th pixel and fill ``step × step`` blocks (see the module docstring).
+    path : callable, default=handheld_trajectory
+        ``path(n_samples, seed=...)`` -> the ground truth at 100 Hz (:func:`handheld_trajectory`,
+        :func:`spinning_trajectory`).
 
     Returns
     -------
@@ -311,7 +334,7 @@ def write_synthetic_sequence(folder, triangles, n_frames=300, seed=0, intrinsics
     triangles = np.asarray(triangles, dtype=np.float64)
     path_seed, *frame_seeds = np.random.SeedSequence(seed).spawn(1 + int(n_frames))
     samples = np.rint(np.arange(int(n_frames)) * GROUNDTRUTH_RATE / FRAME_RATE).astype(int)
-    groundtruth = handheld_trajectory(samples[-1] + 1, seed=path_seed)
+    groundtruth = path(samples[-1] + 1, seed=path_seed)
     rows, cols = -(-intrinsics.height // step), -(-intrinsics.width // step)
     folder.parent.mkdir(parents=True, exist_ok=True)
     staging = Path(tempfile.mkdtemp(prefix=f".{folder.name}.", dir=folder.parent))
@@ -330,6 +353,123 @@ def write_synthetic_sequence(folder, triangles, n_frames=300, seed=0, intrinsics
             "# timestamp filename\n" + "".join(listing))
         write_trajectory(staging / "groundtruth.txt", groundtruth,
                          header=f"ground truth trajectory (synthetic, seed {seed})")
+        os.rename(staging, folder)
+    except BaseException:
+        shutil.rmtree(staging)
+        raise
+    return read_sequence(folder)
+
+
+def rotated_depth(depth, rotation, intrinsics=FR3):
+    """The depth image the same camera sees when turned about its optical centre: ``x_old = R x_new``.
+
+    A pure rotation changes no visibility, so each pixel of the turned camera looks up, along its ray turned into the
+    old camera, the nearest old pixel and takes that pixel's surface point in its own coordinates. Used to make
+    rotation-heavy odometry cases from real frames (motion beyond what the sequence was recorded with).
+
+    Parameters
+    ----------
+    depth : array-like of shape (height, width)
+        Metres, 0 = no measurement.
+    rotation : array-like of shape (3, 3)
+        Turned camera → old camera.
+    intrinsics : Intrinsics
+
+    Returns
+    -------
+    depth : ndarray of shape (height, width)
+        Metres; 0 where the old image has no measurement or the ray leaves its field of view.
+    """
+    depth = np.asarray(depth, dtype=np.float64)
+    rotation = np.asarray(rotation, dtype=np.float64)
+    old_rays = intrinsics.rays() @ rotation.T
+    with np.errstate(divide="ignore", invalid="ignore"):
+        u = np.rint(intrinsics.fx * old_rays[:, 0] / old_rays[:, 2] + intrinsics.cx)
+        v = np.rint(intrinsics.fy * old_rays[:, 1] / old_rays[:, 2] + intrinsics.cy)
+    inside = (old_rays[:, 2] > 0) & (u >= 0) & (u < intrinsics.width) & (v >= 0) & (v < intrinsics.height)
+    u, v = u[inside].astype(int), v[inside].astype(int)
+    z_old = depth[v, u]
+    old_points = z_old[:, None] * np.column_stack([(u - intrinsics.cx) / intrinsics.fx,
+                                                    (v - intrinsics.cy) / intrinsics.fy, np.ones(len(u))])
+    turned = np.zeros(intrinsics.width * intrinsics.height)
+    turned[np.flatnonzero(inside)] = np.where(z_old > 0, old_points @ rotation[:, 2], 0.0)
+    return turned.reshape(intrinsics.height, intrinsics.width)
+
+
+def spin(timestamps, peak_deg_s=90.0, seed=0):
+    """Rotations of a camera shaken about its optical centre: three sinusoids about the camera's axes.
+
+    Each axis turns by ``A sin(2π f t + φ)`` with ``f`` drawn in [1, 2] Hz and the phase at random, and ``A`` such
+    that the axis's peak rate is ``peak_deg_s``; the amplitude stays below 15° so the view keeps most of its content.
+
+    Parameters
+    ----------
+    timestamps : array-like of shape (n_frames,)
+        Seconds.
+    peak_deg_s : float
+        Peak angular rate about each axis (60-120 °/s is a brisk hand-held turn; fr1/xyz's own is about 30).
+    seed : int
+
+    Returns
+    -------
+    rotations : ndarray of shape (n_frames, 3, 3)
+        Turned camera → camera (``x_camera = R x_turned``).
+    """
+    rng = np.random.default_rng(seed)
+    times = np.asarray(timestamps, dtype=np.float64) - float(np.min(timestamps))
+    frequencies = rng.uniform(1.0, 2.0, size=3)
+    amplitudes = np.minimum(np.radians(peak_deg_s) / (2 * np.pi * frequencies), np.radians(15.0))
+    phases = rng.uniform(0, 2 * np.pi, size=3)
+    rotvecs = amplitudes * np.sin(2 * np.pi * times[:, None] * frequencies + phases)
+    return Rotation.from_rotvec(rotvecs).as_matrix()
+
+
+def write_spun_sequence(folder, sequence, frames, peak_deg_s=90.0, seed=0, intrinsics=FR3):
+    """A TUM sequence of real frames with a fast rotation added: each depth image turned by :func:`spin`.
+
+    Frame ``j`` is ``rotated_depth(sequence.depth(j), R_j)`` and its ground truth ``(R G_j, t_j)``, ``(G_j, t_j)``
+    the source's; written to ``folder`` (which must not exist) through a temporary folder and a rename.
+
+    Parameters
+    ----------
+    folder : path-like
+    sequence : TumSequence
+        With ground truth.
+    frames : array-like of int
+        Source frames, in order; each must have a ground-truth pose (``TumSequence.groundtruth_at_frames``).
+    peak_deg_s, seed
+        See :func:`spin`.
+    intrinsics : Intrinsics
+        The source's.
+
+    Returns
+    -------
+    TumSequence
+    """
+    folder = Path(folder)
+    if folder.exists():
+        raise InputError(f"{folder}: already exists; the spun sequence is written to a new folder")
+    matched, poses = sequence.groundtruth_at_frames()
+    rows = np.searchsorted(matched, frames)
+    if np.any(rows >= len(matched)) or np.any(matched[np.minimum(rows, len(matched) - 1)] != frames):
+        raise InputError("write_spun_sequence: every frame needs a ground-truth pose")
+    timestamps = sequence.depth_timestamps[frames]
+    turns = spin(timestamps, peak_deg_s, seed)
+    folder.parent.mkdir(parents=True, exist_ok=True)
+    staging = Path(tempfile.mkdtemp(prefix=f".{folder.name}.", dir=folder.parent))
+    try:
+        listing = []
+        for frame, stamp, turn in zip(frames, timestamps, turns):
+            name = f"depth/{stamp:.6f}.png"
+            write_depth(staging / name, rotated_depth(sequence.depth(frame), turn, intrinsics))
+            listing.append(f"{stamp:.6f} {name}\n")
+        (staging / "depth.txt").write_text(f"# depth maps\n# {sequence.folder.name} spun at {peak_deg_s} deg/s "
+                                           f"(dgmm.odometry.synthetic, seed {seed})\n# timestamp filename\n"
+                                           + "".join(listing))
+        truth = poses.subset(rows)
+        write_trajectory(staging / "groundtruth.txt", Trajectory(timestamps, truth.rotations @ turns,
+                                                                 truth.translations),
+                         header=f"ground truth of {sequence.folder.name}, spun (seed {seed})")
         os.rename(staging, folder)
     except BaseException:
         shutil.rmtree(staging)

@@ -63,7 +63,7 @@ rule odometry_run:
         seed=config["seed"],
         frames=ODO["frames"],
         components=ODO["components"],
-        max_iter=ODO["max_iter"],
+        schedule=ODO["schedule"],
         warm_iter=ODO["warm_iter"],
         pixel_size=ODO["pixel_size"],
         icp_points=ODO["icp_points"],

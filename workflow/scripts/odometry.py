@@ -24,10 +24,10 @@ sequence = read_sequence(smk.input.sequence)
 frames, groundtruth = first_frames(sequence, p.frames)
 seed = job_seed(p.seed, f"odometry/{w.sequence}/{w.run}", 0)
 intrinsics = parse_intrinsics(camera)
-options = dict(intrinsics=intrinsics, n_components=p.components, max_iter=p.max_iter, warm_iter=p.warm_iter or None,
+options = dict(intrinsics=intrinsics, n_components=p.components, schedule=p.schedule, warm_iter=p.warm_iter or None,
                variant=variant, size=p.pixel_size, n_icp_points=p.icp_points, seed=seed)
 params = dict(sequence=w.sequence, folder=str(smk.input.sequence), method=method, variant=variant,
-              intrinsics=camera, frames=len(frames), n_components=p.components, max_iter=p.max_iter,
+              intrinsics=camera, frames=len(frames), n_components=p.components, schedule=p.schedule,
               warm_iter=p.warm_iter, size=p.pixel_size, n_icp_points=p.icp_points, seed=seed, root_seed=p.seed)
 
 with threadpool_limits(smk.threads), OdometryRecorder(out.mcap, out.rrd, params=params, groundtruth=groundtruth,
@@ -37,7 +37,8 @@ with threadpool_limits(smk.threads), OdometryRecorder(out.mcap, out.rrd, params=
 metrics = drift_metrics(result.trajectory, sequence.groundtruth)
 write_trajectory(out.trajectory, result.trajectory, header=f"dgmm {w.run} odometry of {w.sequence}, seed {seed}")
 job = dict(sequence=w.sequence, method=method, variant=variant if method != "icp" else "")
-write_csv(out.ate, [{**job, "frames": len(frames), **{k: "" if v is None else v for k, v in metrics.items()}}])
+metrics = {key: "" if value is None else value for key, value in metrics.items()}
+write_csv(out.ate, [{**job, "schedule": p.schedule if method != "icp" else "", "frames": len(frames), **metrics}])
 write_csv(out.seconds, [{**job, **row} for row in frame_seconds(result)])
 print(f"{w.sequence}/{w.run}: {len(frames)} frames, {metrics}, {result.cpu_seconds.mean():.3f} CPU s per frame",
       file=sys.stderr)

@@ -1,4 +1,4 @@
-"""Job: render the synthetic TUM-format sequence (dgmm.odometry.synthetic): the room with the configured data-stage meshes."""
+"""Job: render the synthetic TUM-format sequence (dgmm.odometry.synthetic): the room with the data-stage meshes."""
 from dgmm.job_server import hand_over
 
 hand_over()  # in a sweep, the rest runs in a fork of the job server, its imports already loaded

@@ -1,0 +1,83 @@
+"""ATE, RPE and CPU cost per frame of odometry under per-frame schedules, to choose the sweep's by measurement.
+
+On one BLAS thread (as the workflow's jobs run), over the first N depth frames of a TUM sequence (fr1/xyz from the
+mirror by default, all 798 frames): each method and EM variant under each schedule, a name of
+``dgmm.odometry.frame_model.SCHEDULES`` or ``SEED_SAMPLE:LLOYD_ITER:EM_ITER:SOLVER`` (a ``Schedule``; SEED_SAMPLE
+``all`` for scikit-learn's k-means on every primitive). Prints one markdown row per run: ATE RMSE, the one-second
+RPE, CPU seconds per frame (fit + D2D; the machine may be shared, so CPU time, not wall time) and the worst
+frame-to-frame error against the ground truth.
+
+Usage: ``python benchmarks/odometry_schedules.py [SEQUENCE_DIR] [--frames N] [--schedules fast reference ...]
+[--variants textbook authors] [--methods gmm-pixels]``.
+"""
+import argparse
+import os
+from pathlib import Path
+
+import numpy as np
+from threadpoolctl import threadpool_limits
+
+from dgmm.odometry import CAMERAS, first_frames, read_sequence, relative_pose_error, run_odometry
+from dgmm.odometry import absolute_trajectory_error, sequence_intrinsics
+from dgmm.odometry.frame_model import SCHEDULES, Schedule
+from dgmm.registration import rotation_distance_deg
+
+FR1_XYZ = Path(__file__).resolve().parents[2] / "shared" / "data" / "tum" / "rgbd_dataset_freiburg1_xyz"
+
+
+def parse_schedule(text):
+    """A SCHEDULES name, or ``SEED_SAMPLE:LLOYD_ITER:EM_ITER:SOLVER``."""
+    if text in SCHEDULES:
+        return SCHEDULES[text]
+    sample, lloyd_iter, em_iter, solver = text.split(":")
+    return Schedule(None if sample == "all" else int(sample), int(lloyd_iter), int(em_iter), solver)
+
+
+def frame_errors(trajectory, groundtruth):
+    """Rotation (deg) and translation (m) error of every frame-to-frame motion against the ground truth's."""
+    rel_est = [(a.T @ b, a.T @ (tb - ta)) for a, b, ta, tb in zip(
+        trajectory.rotations[:-1], trajectory.rotations[1:], trajectory.translations[:-1], trajectory.translations[1:])]
+    rel_gt = [(a.T @ b, a.T @ (tb - ta)) for a, b, ta, tb in zip(
+        groundtruth.rotations[:-1], groundtruth.rotations[1:], groundtruth.translations[:-1],
+        groundtruth.translations[1:])]
+    rotation = np.array([rotation_distance_deg(e[0], g[0]) for e, g in zip(rel_est, rel_gt)])
+    translation = np.array([np.linalg.norm(e[1] - g[1]) for e, g in zip(rel_est, rel_gt)])
+    return rotation, translation
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("sequence", nargs="?", default=str(FR1_XYZ))
+    parser.add_argument("--frames", type=int, default=10_000)
+    parser.add_argument("--schedules", nargs="+", default=["reference"])
+    parser.add_argument("--variants", nargs="+", default=["textbook", "authors"])
+    parser.add_argument("--methods", nargs="+", default=["gmm-pixels"])
+    parser.add_argument("--icp-tol", type=float, default=1e-9, help="ICP's stopping tolerance (m)")
+    parser.add_argument("--intrinsics", default=None, help="CAMERAS key; default from the folder name")
+    args = parser.parse_args()
+    sequence = read_sequence(args.sequence)
+    camera = args.intrinsics or sequence_intrinsics(Path(args.sequence).name)
+    frames, groundtruth = first_frames(sequence, args.frames)
+    print(f"{Path(args.sequence).name}: {len(frames)} frames, intrinsics {camera}, load average "
+          f"{' '.join(f'{x:.2f}' for x in os.getloadavg())}")
+    print("| method | schedule | EM | ATE RMSE (m) | RPE (m/s, deg/s) | CPU s/frame | worst frame (deg, cm) |")
+    print("|---|---|---|---|---|---|---|")
+    with threadpool_limits(1):
+        for method in args.methods:
+            for text in args.schedules:
+                for variant in (args.variants if method != "icp" else [""]):
+                    result = run_odometry(sequence, method, frames, intrinsics=CAMERAS[camera],
+                                          schedule=parse_schedule(text), variant=variant or "textbook",
+                                          icp_tol=args.icp_tol)
+                    ate = absolute_trajectory_error(result.trajectory, sequence.groundtruth)
+                    rpe = relative_pose_error(result.trajectory, sequence.groundtruth)
+                    matched = result.trajectory.subset(np.searchsorted(result.trajectory.timestamps,
+                                                                       groundtruth.timestamps))
+                    rotation, translation = frame_errors(matched, groundtruth)
+                    print(f"| {method} | {text} | {variant or '–'} | {ate.rmse:.4f} | {rpe.translation_rmse:.4f}, "
+                          f"{rpe.rotation_rmse_deg:.2f} | {result.cpu_seconds.mean():.3f} | "
+                          f"{rotation.max():.2f}, {100 * translation.max():.2f} |", flush=True)
+
+
+if __name__ == "__main__":
+    main()
