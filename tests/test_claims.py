@@ -188,6 +188,18 @@ def test_pixels_against_points_is_what_the_paper_compares():
     assert odometry.pixels_beat_points(Measurements(odometry=rows)).grades["textbook"].verdict == "reproduced"
 
 
+def test_the_one_textbook_points_run_is_compared_with_both_pixel_runs():
+    """The sweep runs the plain-point GMM with textbook EM only (odometry_runs): both EMs' pixel runs are graded
+    against it; an authors' points row, if a table had one, would be that EM's."""
+    rows = [odometry_row("fr1", "gmm-pixels", "textbook", 0.5), odometry_row("fr1", "gmm-pixels", "authors", 0.3),
+            odometry_row("fr1", "gmm-points", "textbook", 0.4)]
+    claim = odometry.pixels_beat_points(Measurements(odometry=rows))
+    assert verdicts(claim) == {"authors": "reproduced", "textbook": "not reproduced"}
+    assert "fr1 pixels 0.300 m, points 0.400 m" in claim.evidence
+    rows.append(odometry_row("fr1", "gmm-points", "authors", 0.2))
+    assert odometry.pixels_beat_points(Measurements(odometry=rows)).grades["authors"].verdict == "not reproduced"
+
+
 def test_every_claim_grades_both_ems_and_is_pending_without_data():
     evaluated = claims.evaluate(Measurements())
     assert len(evaluated) == len(claims.CLAIMS) >= 40

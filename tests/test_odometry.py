@@ -11,11 +11,11 @@ from scipy.spatial.transform import Rotation
 from threadpoolctl import threadpool_limits
 
 from dgmm.errors import DataError
-from dgmm.odometry import run_odometry
+from dgmm.odometry import odometry_runs, run_odometry
 from dgmm.odometry.pixels import FR3, backproject, pixel_primitives
 from dgmm.odometry.metrics import absolute_trajectory_error
-from dgmm.odometry.tum import (DEPTH_SCALE, Trajectory, associate, read_depth, read_sequence, read_trajectory, write_depth,
-                      write_trajectory)
+from dgmm.odometry.tum import (DEPTH_SCALE, Trajectory, associate, read_depth, read_sequence, read_trajectory,
+                               write_depth, write_trajectory)
 from dgmm.odometry.synthetic import _nearest_hits, handheld_trajectory, room_scene, write_synthetic_sequence
 from tests.test_odometry_metrics import FR1_XYZ, needs_fr1
 
@@ -308,3 +308,11 @@ def test_gmm_pixels_d2d_holds_under_pure_rotation(axis):
     print(f"\n{axis} 5°: D2D error {angle_error(d2d):.3f}°, ICP {angle_error(icp):.3f}°")
     assert angle_error(d2d) < 0.1 and np.linalg.norm(d2d.translation) < 0.005
     assert angle_error(d2d) <= angle_error(icp)
+
+
+def test_point_gmm_runs_textbook_em_only():
+    """With unit sizes the authors' EM is textbook EM (scale alpha / min alpha = 1, unweighted M-step = weighted), so
+    the sweep runs gmm-points once; gmm-pixels, whose sizes are footprint areas, runs every variant, ICP none."""
+    runs = odometry_runs(["gmm-pixels", "gmm-points", "icp"], ["textbook", "authors"])
+    assert runs == {"gmm-pixels-textbook": ("gmm-pixels", "textbook"), "gmm-pixels-authors": ("gmm-pixels", "authors"),
+                    "gmm-points-textbook": ("gmm-points", "textbook"), "icp": ("icp", "")}

@@ -176,6 +176,11 @@ METHODS = {
 MIXTURE_METHODS = ("gmm-pixels", "gmm-points")
 """The methods that fit a GMM per frame, and so run with an EM ``variant``."""
 
+UNSIZED_METHODS = ("gmm-points",)
+"""Mixture methods whose primitives all have size 1: every EM variant is the same algorithm there (the authors'
+E-step scale ``alpha / min(alpha)`` is 1 and their unweighted M-step is the textbook one), so they run textbook EM
+only, as the registration's point mixtures do (:func:`dgmm.trials.method_variants`)."""
+
 
 def odometry_runs(methods, variants):
     """The (method, variant) pairs of a sweep, named as its jobs' folders.
@@ -185,12 +190,18 @@ def odometry_runs(methods, variants):
     methods : sequence of str
         Keys of ``METHODS``.
     variants : sequence of str
-        EM variants of the mixture methods (ICP has none).
+        EM variants of the mixture methods of sized primitives (gmm-pixels); :data:`UNSIZED_METHODS` run textbook
+        EM only and ICP has none.
 
     Returns
     -------
     runs : dict of str to (str, str)
         ``"gmm-pixels-textbook" -> ("gmm-pixels", "textbook")`` …, ``"icp" -> ("icp", "")``, in the given order.
     """
+    def method_variants(method):
+        if method not in MIXTURE_METHODS:
+            return [""]
+        return ["textbook"] if method in UNSIZED_METHODS else list(variants)
+
     return {f"{method}-{variant}" if variant else method: (method, variant)
-            for method in methods for variant in (variants if method in MIXTURE_METHODS else [""])}
+            for method in methods for variant in method_variants(method)}

@@ -1,7 +1,8 @@
 # Visual odometry (paper §V "Visual Odometry", Fig 6): frame-to-frame odometry of the first odometry.frames depth
 # frames of every configured TUM RGB-D sequence that exists (odometry.sequences; missing ones are reported pending)
 # and of the synthetic one (rendered once from the seed into results/odometry/synthetic/sequence/), one job per
-# (sequence, run): a run is a GMM method with an EM variant (gmm-pixels-textbook, gmm-points-authors, ...) or icp.
+# (sequence, run): a run is a GMM method with an EM variant (gmm-pixels-textbook, gmm-pixels-authors; the plain-point
+# GMM runs textbook EM only, the same algorithm as the authors' on unit sizes: gmm-points-textbook) or icp.
 # Under results/odometry/{sequence}/{run}/ ({sequence}: the folder's name, or "synthetic"):
 #   trajectory.txt   the estimated trajectory, TUM format (camera -> first camera)
 #   ate.csv          ATE RMSE and the one-second RPE against the ground truth, and the frame count (deterministic)

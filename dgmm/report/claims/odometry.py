@@ -3,6 +3,7 @@
 The paper ran TUM fr3/long_office_household (2510 frames); our sequences (fr1/xyz and a synthetic one, unless the
 fr3 folder is present) are stand-ins for it: the claims are graded on what they show and say so.
 """
+from dgmm.odometry.frame_model import UNSIZED_METHODS
 from dgmm.report import paper
 from dgmm.report.claims.rules import (MACHINE, REPRODUCED, SHARE_RULE, VARIANTS, VARIANT_NAMES, Claim, Grade, lost,
                                       mean, missing, pending, ratio_verdict, share_verdict)
@@ -13,10 +14,12 @@ STAND_INS = "our sequences stand in for the paper's fr3/long_office_household"
 
 
 def _runs(rows, variant, column):
-    """``sequence -> {method: float(column)}`` of the runs of ``variant`` (ICP, which has none, in every variant)."""
+    """``sequence -> {method: float(column)}`` of the runs of ``variant``; ICP, which has none, and the plain-point
+    GMM, whose one textbook run is every variant's (all sizes are 1), serve every variant."""
     runs = {}
     for row in rows or []:
-        if row.get("method") and row.get("variant", "") in (variant, "") and row.get(column, "") != "":
+        serves = ("", variant, "textbook") if row.get("method") in UNSIZED_METHODS else ("", variant)
+        if row.get("method") and row.get("variant", "") in serves and row.get(column, "") != "":
             runs.setdefault(row["sequence"], {})[row["method"]] = float(row[column])
     return runs
 
