@@ -193,7 +193,7 @@ def test_odometry_composes_relative_poses_in_order(monkeypatch):
     def prepare(depth, intrinsics, rng, previous, options):
         return int(depth[0, 0])
 
-    def register(fixed, moving):
+    def register(fixed, moving, options):
         relative_rotation = rotations[fixed].T @ rotations[moving]
         relative_translation = rotations[fixed].T @ (translations[moving] - translations[fixed])
         return Registration(relative_rotation, relative_translation, 1, 0.0, 0.0, True, "stand-in")
