@@ -25,9 +25,8 @@ extensions = [
 ]
 
 source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
-# docs/notes/ holds the engineers' notes that the benchmarks page is assembled from; they are not pages.
 # docs/examples/ holds the gallery's sources; sphinx-gallery turns them into the pages of auto_examples/.
-exclude_patterns = ["_build", "notes", "examples"]
+exclude_patterns = ["_build", "examples"]
 templates_path = ["_templates"]
 myst_heading_anchors = 3
 myst_enable_extensions = ["dollarmath", "amsmath"]
