@@ -20,6 +20,14 @@ def _errors(data, variant):
     return {method: errors[(*FIG5_MESH, method)] for method in FIG5_METHODS if (*FIG5_MESH, method) in errors}
 
 
+def _mesh_below_others(stats, describe):
+    """``(comparisons, failed)``: mesh-kmeans' statistic against that of every method not fitted to the mesh, per
+    error; ``describe(method, error)`` names a comparison mesh-kmeans does not win."""
+    others = [m for m in stats if not m.startswith("mesh")]
+    failed = [describe(m, e) for m in others for e in ERROR_NAMES if not stats["mesh-kmeans"][e] < stats[m][e]]
+    return 2 * len(others), failed
+
+
 def _means(errors):
     return {method: {name: float(np.mean(values)) for name, values in e.items()} for method, e in errors.items()}
 
@@ -37,10 +45,8 @@ def mesh_registers_best(data):
             grades[variant] = missing(WHAT)
             continue
         means = _means(errors)
-        others = [m for m in means if not m.startswith("mesh")]
-        failed = [f"{m}'s mean {ERROR_NAMES[e]} error is lower ({means[m][e]:.3g} vs {means['mesh-kmeans'][e]:.3g})"
-                  for m in others for e in ERROR_NAMES if not means["mesh-kmeans"][e] < means[m][e]]
-        total = 2 * len(others)
+        total, failed = _mesh_below_others(means, lambda m, e: f"{m}'s mean {ERROR_NAMES[e]} error is lower "
+                                                               f"({means[m][e]:.3g} vs {means['mesh-kmeans'][e]:.3g})")
         ours = means["mesh-kmeans"]
         lines.append(f"{VARIANT_NAMES[variant]}: " + "; ".join(
             f"{m} {v['rot']:.3g}° / {v['trans']:.3g}%" for m, v in means.items()))
@@ -70,10 +76,8 @@ def mesh_less_prone_to_outliers(data):
             grades[variant] = missing(WHAT)
             continue
         skews = {m: {e: _skew(v) for e, v in values.items()} for m, values in errors.items()}
-        others = [m for m in skews if not m.startswith("mesh")]
-        failed = [f"{m} {ERROR_NAMES[e]} {skews[m][e]:+.0%} vs {skews['mesh-kmeans'][e]:+.0%}"
-                  for m in others for e in ERROR_NAMES if not skews["mesh-kmeans"][e] < skews[m][e]]
-        total = 2 * len(others)
+        total, failed = _mesh_below_others(
+            skews, lambda m, e: f"{m} {ERROR_NAMES[e]} {skews[m][e]:+.0%} vs {skews['mesh-kmeans'][e]:+.0%}")
         lines.append(f"{VARIANT_NAMES[variant]}: " + "; ".join(
             f"{m} {s['rot']:+.0%} / {s['trans']:+.0%}" for m, s in skews.items()))
         grades[variant] = Grade(share_verdict(total - len(failed), total),
