@@ -193,25 +193,32 @@ def _triangle_groups(triangles, group_size=32, cell=0.1):
     return [order[start:start + group_size] for start in range(0, len(order), group_size)]
 
 
-def _slab_hits(rays, origin, low, high):
-    """Whether each ray from ``origin`` meets the box ``[low, high]`` (slab test), shape (n_rays,)."""
+def _slab_hits(axis_rays, origin, low, high):
+    """Whether each ray from ``origin`` meets the box ``[low, high]`` (slab test), shape (n_rays,).
+
+    ``axis_rays`` has shape (3, n_rays): the rays' coordinates axis by axis, so the reductions over the three
+    slabs run along whole rows (far fewer CPU cycles than along rows of three).
+    """
     with np.errstate(divide="ignore", invalid="ignore"):
-        near, far = (low - origin) / rays, (high - origin) / rays
-    entry = np.fmax(np.fmin(near, far).max(axis=1), 0.0)
-    return np.fmin(np.fmax(near, far).min(axis=1), np.inf) >= entry
+        near, far = (low - origin)[:, None] / axis_rays, (high - origin)[:, None] / axis_rays
+    entry = np.fmax(np.fmin(near, far).max(axis=0), 0.0)
+    return np.fmin(np.fmax(near, far).min(axis=0), np.inf) >= entry
 
 
-def _nearest_hits(rays, origin, triangles):
+def _nearest_hits(rays, origin, triangles, block=2048):
     """Möller–Trumbore for rays sharing one origin: parameter and ``|det|`` of each ray's nearest hit.
 
     With ``e1, e2`` the edges from ``v0`` and ``s = o − v0``: ``det = d·(e2×e1)``, ``u det = d·(e2×s)``,
-    ``v det = d·(s×e1)`` and ``t det = e2·(s×e1)``, so three matrix products serve all rays and triangles.
+    ``v det = d·(s×e1)`` and ``t det = e2·(s×e1)``, so three matrix products serve all rays and triangles. Rays go
+    in blocks of ``block``, which keeps the (rays × triangles) arrays in the CPU cache; every ray's arithmetic is
+    the same whatever the block.
 
     Parameters
     ----------
     rays : ndarray of shape (n_rays, 3)
     origin : ndarray of shape (3,)
     triangles : ndarray of shape (n_triangles, 3, 3)
+    block : int
 
     Returns
     -------
@@ -225,10 +232,21 @@ def _nearest_hits(rays, origin, triangles):
     s = origin - v0
     q = np.cross(s, e1)
     normal = np.cross(e2, e1)
-    det, u_det, v_det = (rays @ vectors.T for vectors in (normal, np.cross(e2, s), q))
+    vectors = (normal.T, np.cross(e2, s).T, q.T)
+    t_det = np.einsum("td,td->t", e2, q)
+    t, cosine = np.empty(len(rays)), np.empty(len(rays))
+    for start in range(0, len(rays), block):
+        t[start:start + block], cosine[start:start + block] = _block_hits(rays[start:start + block], vectors, t_det,
+                                                                          normal)
+    return t, cosine
+
+
+def _block_hits(rays, vectors, t_det, normal):
+    """:func:`_nearest_hits` for one block of rays, given the triangles' ``(e2×e1, e2×s, s×e1)`` and ``t det``."""
+    det, u_det, v_det = (rays @ vectors_t for vectors_t in vectors)
     with np.errstate(divide="ignore", invalid="ignore"):
         inverse = 1.0 / det
-        u, v, t = u_det * inverse, v_det * inverse, np.einsum("td,td->t", e2, q) * inverse
+        u, v, t = u_det * inverse, v_det * inverse, t_det * inverse
     hit = (np.abs(det) > 1e-12) & (u >= 0) & (v >= 0) & (u + v <= 1) & (t > 1e-9)
     t = np.where(hit, t, np.inf)
     nearest = t.argmin(axis=1)
@@ -263,11 +281,13 @@ def render_depth(triangles, rotation, translation, intrinsics=FR3, step=PIXEL_ST
         ``|cos|`` of the angle between the ray and the hit surface's normal (0 where no hit).
     """
     rays = intrinsics.rays(step) @ np.asarray(rotation).T
+    axis_rays = np.ascontiguousarray(rays.T)
     origin = np.asarray(translation, dtype=np.float64)
     depth, cosine = np.full(len(rays), np.inf), np.zeros(len(rays))
     for group in _triangle_groups(triangles):  # a few dozen groups, each vectorised over rays × triangles
         members = triangles[group]
-        candidates = np.flatnonzero(_slab_hits(rays, origin, members.min(axis=(0, 1)), members.max(axis=(0, 1))))
+        candidates = np.flatnonzero(_slab_hits(axis_rays, origin, members.min(axis=(0, 1)),
+                                               members.max(axis=(0, 1))))
         t, group_cosine = _nearest_hits(rays[candidates], origin, members)
         nearer = t < depth[candidates]
         depth[candidates[nearer]] = t[nearer]
