@@ -243,12 +243,18 @@ def _nearest_hits(rays, origin, triangles, block=2048):
 
 def _block_hits(rays, vectors, t_det, normal):
     """:func:`_nearest_hits` for one block of rays, given the triangles' ``(e2×e1, e2×s, s×e1)`` and ``t det``."""
-    det, u_det, v_det = (rays @ vectors_t for vectors_t in vectors)
+    det, u, v = (rays @ vectors_t for vectors_t in vectors)  # u det and v det, made u and v in place
     with np.errstate(divide="ignore", invalid="ignore"):
         inverse = 1.0 / det
-        u, v, t = u_det * inverse, v_det * inverse, t_det * inverse
-    hit = (np.abs(det) > 1e-12) & (u >= 0) & (v >= 0) & (u + v <= 1) & (t > 1e-9)
-    t = np.where(hit, t, np.inf)
+        u *= inverse
+        v *= inverse
+        t = np.multiply(t_det, inverse, out=inverse)
+    hit = np.abs(det) > 1e-12
+    hit &= u >= 0
+    hit &= v >= 0
+    hit &= np.add(u, v, out=u) <= 1
+    hit &= t > 1e-9
+    t[~hit] = np.inf
     nearest = t.argmin(axis=1)
     rows = np.arange(len(rays))
     t = t[rows, nearest]
