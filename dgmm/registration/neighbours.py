@@ -29,7 +29,7 @@ class TrackedNeighbours:
         self.anchors = None
 
     def _anchor(self, queries, rows):
-        """Anchor ``queries[rows]``: their candidates by a tree query, and the radius (infinite if all are candidates)."""
+        """Anchor ``queries[rows]``: candidates from a tree query, and their radius (infinite if every point is one)."""
         distances, indices = self.tree.query(queries[rows], k=self.ranks)
         self.anchors[rows], self.candidates[:, rows] = queries[rows], indices.T
         self.candidate_points[:, :, rows] = self.points[indices].transpose(2, 1, 0)

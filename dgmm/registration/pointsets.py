@@ -50,7 +50,9 @@ def register_icp(source, target, max_iter=50_000, tol=1e-9, callback=None):
 
     Every iteration pools source→target and target→source nearest-neighbour pairs (the target→source pairs
     weighted ``n_source / n_target`` so both directions count equally), takes the closed-form Kabsch step on
-    them, and stops when the weighted mean matching distance changes by less than ``tol``.
+    them, and stops when the weighted mean matching distance changes by less than ``tol``. The neighbours are exact
+    (:class:`~dgmm.registration.neighbours.TrackedNeighbours`: a k-d tree per side, built once, re-queried only
+    where the previous neighbours cannot be proven still nearest).
 
     Parameters
     ----------
