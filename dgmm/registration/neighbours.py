@@ -34,6 +34,7 @@ class TrackedNeighbours:
         self.anchors[rows], self.candidates[:, rows] = queries[rows], indices.T
         self.candidate_points[:, :, rows] = self.points[indices].transpose(2, 1, 0)
         self.radius[rows] = distances[:, -1] if len(self.ranks) < len(self.points) else np.inf
+        return distances, indices
 
     def query(self, queries):
         """Distance to and index of each query row's nearest point.
@@ -65,9 +66,12 @@ class TrackedNeighbours:
         margin = 1e-9 * (np.abs(queries).max() + self.scale)  # far above the distances' rounding
         unproven = distances >= self.radius - drift - margin  # a point off the candidates may be nearer
         tied = np.count_nonzero(squared <= (distances + margin) ** 2, axis=0) > 1
-        if unproven.any():
-            self._anchor(queries, np.flatnonzero(unproven))
-        redo = np.flatnonzero(unproven | tied)  # the tree answers these, with its own choice between near-equals
+        if unproven.any():  # the tree's nearest, unless the runner-up is as near
+            anchored = np.flatnonzero(unproven)
+            ranked, ranked_indices = self._anchor(queries, anchored)
+            distances[anchored], indices[anchored] = ranked[:, 0], ranked_indices[:, 0]
+            tied[anchored] = ranked[:, 1] - ranked[:, 0] <= margin if len(self.ranks) > 1 else False
+        redo = np.flatnonzero(tied)  # the tree's own choice between near-equals
         if len(redo):
             distances[redo], indices[redo] = self.tree.query(queries[redo])
         return distances, indices
