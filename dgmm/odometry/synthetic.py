@@ -230,15 +230,20 @@ def _nearest_hits(rays, origin, triangles, block=2048):
     v0 = triangles[:, 0]
     e1, e2 = triangles[:, 1] - v0, triangles[:, 2] - v0
     s = origin - v0
-    q = np.cross(s, e1)
-    normal = np.cross(e2, e1)
-    vectors = (normal.T, np.cross(e2, s).T, q.T)
+    q = _cross(s, e1)
+    normal = _cross(e2, e1)
+    vectors = (normal.T, _cross(e2, s).T, q.T)
     t_det = np.einsum("td,td->t", e2, q)
     t, cosine = np.empty(len(rays)), np.empty(len(rays))
     for start in range(0, len(rays), block):
         t[start:start + block], cosine[start:start + block] = _block_hits(rays[start:start + block], vectors, t_det,
                                                                           normal)
     return t, cosine
+
+
+def _cross(a, b):
+    """Row-wise cross products of (n, 3) arrays: ``np.cross``'s products and differences without its per-call cost."""
+    return a[:, [1, 2, 0]] * b[:, [2, 0, 1]] - a[:, [2, 0, 1]] * b[:, [1, 2, 0]]
 
 
 def _block_hits(rays, vectors, t_det, normal):
