@@ -73,7 +73,7 @@ _PARAMETERS = {
     "n_components": (_is_int(1), "an integer >= 1"),
     "init": (lambda v: v in INITS, f"one of {INITS}"),
     "max_iter": (_is_int(1), "an integer >= 1"),
-    "tol": (_is_real(0), "a finite number >= 0"),
+    "tol": (lambda v: v is None or _is_real(0)(v), "None or a finite number >= 0"),
     "reg_covar": (_is_real(0), "a finite number >= 0"),
     "variant": (lambda v: v in VARIANTS, f"one of {tuple(VARIANTS)}"),
     "callback": (lambda v: v is None or callable(v), "None or a callable(iteration, model)"),
@@ -328,8 +328,11 @@ class GaussianMixture(BaseEstimator):
         "kmeans": hard labels from k-means on the primitive means weighted by size; "random": uniform random
         soft responsibilities.
     max_iter : int, default=25
-    tol : float, default=1e-12
-        EM stops when the bound changes by less than ``tol`` between iterations.
+    tol : float or None, default=1e-12
+        EM stops when the bound changes by less than ``tol`` between iterations. None (as scikit-learn's SGD
+        estimators take it): exactly ``max_iter`` iterations and no E-step after the last M-step, whose only use
+        would be the bound (a third of the cost of a 2-iteration fit); ``lower_bound_`` is then the bound of the
+        parameters before the last M-step, as scikit-learn's is, and ``history_`` has ``max_iter - 1`` entries.
     reg_covar : float, default=1e-6
         Added to the diagonal of every covariance: absolute, in the data's squared units, as scikit-learn
         does (fitting ``s · X`` with ``reg_covar · s²`` gives the mixture of ``X`` scaled by ``s``). Duplicate
@@ -370,7 +373,8 @@ class GaussianMixture(BaseEstimator):
     lower_bound_ : float
         The bound of the fitted parameters on the training primitives.
     history_ : list of float
-        The bound after each iteration; ``history_[-1] == lower_bound_``.
+        The bound after each iteration (but the last when ``tol`` is None); ``history_[-1] == lower_bound_``
+        when it is not empty.
     """
 
     def __init__(self, n_components=1, *, init="kmeans", max_iter=25, tol=1e-12, reg_covar=1e-6,
@@ -511,18 +515,21 @@ class GaussianMixture(BaseEstimator):
             self.history_, self.converged_ = [], False
             for iteration in range(1, self.max_iter + 1):
                 previous = bound
+                scored = self.tol is not None or iteration < self.max_iter
                 try:
                     params = _m_step(sums, reg_covar)
-                    sums, bound = e_step(params[:3], blocks)
-                    _check_bound(bound)
+                    if scored:
+                        sums, bound = e_step(params[:3], blocks)
+                        _check_bound(bound)
                     self._store(params, centre, unit)
                 except FitError as exc:
                     raise FitError(f"EM iteration {iteration}: {exc}") from None
-                self.history_.append(float(bound))
+                if scored:
+                    self.history_.append(float(bound))
                 self.n_iter_ = iteration
                 if self.callback is not None:
                     self.callback(iteration, self)
-                if abs(bound - previous) < self.tol:
+                if self.tol is not None and abs(bound - previous) < self.tol:
                     self.converged_ = True
                     break
         self.lower_bound_ = float(bound)

@@ -12,6 +12,7 @@ from scipy.stats import multivariate_normal
 from sklearn.base import clone
 from sklearn.mixture import GaussianMixture as SklearnGaussianMixture
 
+import dgmm.mixture
 from dgmm import FitError, GaussianMixture, InputError, Primitives
 from tests.test_primitives import uniform_in_triangle
 
@@ -122,6 +123,30 @@ def test_points_agree_with_scikit_learn_from_the_same_start(bunny_res4, n_compon
     assert ours.lower_bound_ == pytest.approx(reference.score(points), abs=1e-10)
     np.testing.assert_allclose(ours.score_samples(points), reference.score_samples(points), rtol=0, atol=1e-9)
     assert ours.n_iter_ == 25 and not ours.converged_
+
+
+def test_tol_none_runs_every_iteration_without_the_final_e_step_as_scikit_learn_bounds(bunny_res4, monkeypatch):
+    """``tol=None``: the parameters after 3 iterations are scikit-learn's from the same start; the E-step after the
+    last M-step is not run (3 E-steps, not 4), so ``lower_bound_`` is the bound before that M-step, which is
+    what scikit-learn's ``lower_bound_`` is."""
+    points = trimesh.sample.sample_surface(bunny_res4, 3000, seed=5)[0]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # scikit-learn warns that 1 and 3 iterations do not converge
+        start = SklearnGaussianMixture(7, init_params="random", max_iter=1, random_state=0).fit(points)
+        init = dict(weights_init=start.weights_, means_init=start.means_, precisions_init=start.precisions_)
+        reference = SklearnGaussianMixture(7, max_iter=3, tol=0, **init).fit(points)
+    e_steps = []
+    e_step_block = dgmm.mixture._e_step_block
+    monkeypatch.setattr(dgmm.mixture, "_e_step_block", lambda *args: e_steps.append(1) or e_step_block(*args))
+    ours = GaussianMixture(7, max_iter=3, tol=None, **init).fit(points)
+
+    assert len(e_steps) == 3
+    for name in ("weights_", "means_", "covariances_", "precisions_cholesky_"):
+        expected = getattr(reference, name)
+        np.testing.assert_allclose(getattr(ours, name), expected, rtol=1e-8, atol=1e-8 * np.abs(expected).max())
+    np.testing.assert_allclose(ours.history_, reference.lower_bounds_[1:], rtol=0, atol=1e-10)
+    assert ours.lower_bound_ == pytest.approx(reference.lower_bound_, abs=1e-10)
+    assert ours.n_iter_ == 3 and not ours.converged_
 
 
 def test_scores_of_many_points_do_not_depend_on_the_blocks(bunny_res4):
@@ -325,6 +350,7 @@ def test_callback_sees_every_iteration(bunny_res4):
         (dict(n_components=500), None, "larger than the 453 primitives"),
         (dict(init="kmeans++"), None, "init='kmeans\\+\\+'"),
         (dict(tol=-1.0), None, "tol=-1.0"),
+        (dict(tol="none"), None, "tol='none'"),
         (dict(reg_covar=float("nan")), None, "reg_covar=nan"),
         (dict(variant="paper"), None, "variant='paper'"),
         (dict(n_components=2, means_init=np.zeros((3, 3))), None, "means_init must have shape"),

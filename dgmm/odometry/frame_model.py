@@ -74,7 +74,8 @@ class Schedule:
     lloyd_iter : int
         Lloyd iterations on every primitive after the seeds (unused when ``seed_sample`` is None).
     em_iter : int
-        EM iterations from the start.
+        EM iterations from the start (a sampled start runs exactly that many, without the E-step after the last
+        M-step that only a bound would need: ``GaussianMixture(tol=None)``).
     solver : {"bfgs", "gauss-newton"}
         D2D's solver (``dgmm.registration.register_d2d``).
     """
@@ -110,7 +111,7 @@ def _fit_mixture(prims, rng, previous, options):
         return GaussianMixture(k, max_iter=schedule.em_iter, **common).fit(prims)
     weights, means, precisions = lloyd_start(prims, k, schedule.seed_sample, schedule.lloyd_iter, options["variant"],
                                              rng, REG_COVAR)
-    return GaussianMixture(k, max_iter=schedule.em_iter, weights_init=weights, means_init=means,
+    return GaussianMixture(k, max_iter=schedule.em_iter, tol=None, weights_init=weights, means_init=means,
                            precisions_init=precisions, **common).fit(prims)
 
 
