@@ -23,6 +23,7 @@ import numpy as np
 from sklearn.cluster import kmeans_plusplus
 
 from dgmm.mixture import GaussianMixture
+from dgmm.odometry.overlap import register_d2d_overlap
 from dgmm.odometry.pixels import backproject, pixel_primitives
 from dgmm.primitives import Primitives
 from dgmm.registration import register_d2d, register_icp
@@ -74,12 +75,16 @@ class Schedule:
         EM iterations from the start.
     solver : {"bfgs", "gauss-newton"}
         D2D's solver (``dgmm.registration.register_d2d``).
+    overlap_rounds : int, default=0
+        Rounds of D2D on the components the other frame's camera sees, after the first registration
+        (:func:`dgmm.odometry.overlap.register_d2d_overlap`); 0 registers the whole mixtures once.
     """
 
     seed_sample: int | None
     lloyd_iter: int
     em_iter: int
     solver: str
+    overlap_rounds: int = 0
 
 
 SCHEDULES = {
@@ -157,7 +162,10 @@ def _prepare_icp(depth, intrinsics, rng, previous, options):
 
 
 def _register_d2d(fixed, moving, options):
-    return register_d2d(fixed, moving, solver=options["schedule"].solver)
+    schedule = options["schedule"]
+    if schedule.overlap_rounds:
+        return register_d2d_overlap(fixed, moving, options["intrinsics"], schedule.overlap_rounds, schedule.solver)
+    return register_d2d(fixed, moving, solver=schedule.solver)
 
 
 def _register_icp(fixed, moving, options):
