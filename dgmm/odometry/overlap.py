@@ -138,10 +138,11 @@ def register_d2d_common_view(fixed, moving, fit, intrinsics, rounds=2, scales=(0
     first = register_d2d_overlap(fixed[0], moving[0], intrinsics, rounds, scales, solver)
     rotation, translation = first.rotation, first.translation
     refitted = []
-    for frame, ((_, prims), (turn, shift)) in enumerate(zip((fixed, moving), ((rotation.T, -rotation.T @ translation),
-                                                                             (rotation, translation)))):
+    # x_fixed = R x_moving + t: the moving camera sees fixed primitives moved by (Rᵀ, -Rᵀ t), and conversely.
+    views = ((fixed, rotation.T, -rotation.T @ translation), (moving, rotation, translation))
+    for frame, ((mixture, prims), turn, shift) in enumerate(views):
         keep = seen_by(prims.means, turn, shift, intrinsics)
-        if keep.sum() < len((fixed, moving)[frame][0].weights_):  # fewer primitives than components: no refit
+        if keep.sum() < len(mixture.weights_):  # fewer primitives than components: no refit
             return first
         refitted.append(fit(Primitives(prims.means[keep], prims.covariances[keep], prims.weights[keep]), frame))
     final = register_d2d(*refitted, rotation, translation, solver=solver)
