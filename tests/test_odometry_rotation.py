@@ -16,7 +16,8 @@ from scipy.spatial.transform import Rotation
 from threadpoolctl import threadpool_limits
 
 from dgmm.odometry import CAMERAS, first_frames, pixel_primitives, read_sequence, run_odometry
-from dgmm.odometry.frame_model import REG_COVAR, SCHEDULES, Schedule, _fit_mixture, _lloyd_start
+from dgmm.odometry.em_start import lloyd_start
+from dgmm.odometry.frame_model import REG_COVAR, SCHEDULES, _fit_mixture
 from dgmm.odometry.overlap import seen_by
 from dgmm.odometry.pixels import FR3
 from dgmm.odometry.synthetic import (room_scene, rotated_depth, spin, spinning_trajectory, write_spun_sequence,
@@ -74,8 +75,7 @@ def test_fast_start_finds_separated_blobs(variant):
     covariances = np.einsum("n,ij->nij", rng.uniform(1e-5, 4e-5, len(means)), np.eye(3))
     sizes = rng.uniform(0.5, 2.0, len(means))
     prims = Primitives(means, covariances, sizes)
-    weights, start_means, precisions = _lloyd_start(prims, 3, Schedule(64, 5, 1, "gauss-newton"), variant,
-                                                    np.random.default_rng(1))
+    weights, start_means, precisions = lloyd_start(prims, 3, 64, 5, variant, np.random.default_rng(1), REG_COVAR)
     blob = np.repeat(np.arange(3), counts)
     m_weights = sizes if variant == "textbook" else np.ones(len(means))
     order = np.argsort(start_means[:, 0] + 10 * start_means[:, 2])  # blobs 0, 1, 2 by x then z

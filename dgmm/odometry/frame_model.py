@@ -20,19 +20,22 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from sklearn.cluster import kmeans_plusplus
 
 from dgmm.mixture import GaussianMixture
+from dgmm.odometry.em_start import lloyd_start
 from dgmm.odometry.overlap import register_d2d_common_view, register_d2d_overlap
 from dgmm.odometry.pixels import backproject, pixel_primitives
 from dgmm.primitives import Primitives
 from dgmm.registration import register_d2d, register_icp
-from dgmm.variants import VARIANTS
 
-_ROWS, _COLS = np.array([0, 1, 2, 0, 0, 1]), np.array([0, 1, 2, 1, 2, 2])  # the 6 distinct entries of a 3x3
-_FULL = np.array([[0, 3, 4], [3, 1, 5], [4, 5, 2]])  # each entry of the full 3x3 in those 6
 REG_COVAR = 1e-6
 """Every frame's mixture's ``reg_covar`` (``GaussianMixture``'s default)."""
+
+EM_BLOCK_BYTES = 2**19
+"""Every frame's EM streams its responsibilities in blocks of this many bytes (``GaussianMixture``'s
+``memory_limit``): a frame's (14,415 x 100) responsibilities are 11.5 MB, and EM's passes over half-MiB blocks stay
+in the CPU's cache. Two EM iterations of an fr1/xyz frame on one thread: 29.8 ms in one block, 26.1, 24.8 and 25.8 ms
+in 1 MiB, 512 KiB and 256 KiB blocks."""
 
 STARVED_WEIGHT = 0.1
 """Warm start: a component of the previous frame's mixture whose weight is below ``STARVED_WEIGHT / K`` restarts."""
@@ -104,53 +107,21 @@ schedule was chosen by measurement. ``"fast"``, the sweep's default: k-means++ s
 iterations and 2 EM iterations on every primitive, Gauss-Newton D2D (benchmarks/odometry_schedules.py)."""
 
 
-def _lloyd_start(prims, n_components, schedule, variant, rng):
-    """Weights, means and precisions of the hard-label M-step after k-means++ seeds and Lloyd iterations.
-
-    The seeds are k-means++ (scikit-learn) on ``schedule.seed_sample`` primitives drawn at random, weighted by
-    their M-step weights; ``schedule.lloyd_iter`` Lloyd iterations then run on every primitive's mean with those
-    weights (a cluster left empty keeps its centre). Each component takes its cluster's weight, weighted mean and
-    covariance (the spread of the primitives' means plus their own covariances, ``REG_COVAR`` on the diagonal), as
-    ``GaussianMixture``'s k-means start does; an empty cluster gets the median covariance and a weight of
-    ``1e-3 / K``.
-    """
-    _, weights = VARIANTS[variant](prims.weights)
-    points = prims.means
-    sample = rng.choice(len(points), size=min(schedule.seed_sample, len(points)), replace=False)
-    centres, _ = kmeans_plusplus(points[sample], n_components, sample_weight=weights[sample],
-                                 random_state=int(rng.integers(np.iinfo(np.int32).max)))
-    for _ in range(schedule.lloyd_iter + 1):  # the last pass only labels
-        labels = (np.sum(centres ** 2, axis=1) - 2.0 * points @ centres.T).argmin(axis=1)
-        mass = np.bincount(labels, weights, minlength=n_components)
-        present = mass > 0
-        sums = np.stack([np.bincount(labels, weights * points[:, d], minlength=n_components) for d in range(3)], 1)
-        centres[present] = sums[present] / mass[present, None]
-    offsets = points - centres[labels]
-    moments = offsets[:, _ROWS] * offsets[:, _COLS] + prims.covariances[:, _ROWS, _COLS]
-    covariances = np.stack([np.bincount(labels, weights * moments[:, m], minlength=n_components)
-                            for m in range(6)], 1)[:, _FULL]
-    covariances[present] /= mass[present, None, None]
-    if not present.all():
-        covariances[~present] = np.median(covariances[present], axis=0)
-        mass[~present] = 1e-3 * mass.sum() / n_components
-    covariances += REG_COVAR * np.eye(3)
-    return mass / mass.sum(), centres, np.linalg.inv(covariances)
-
-
 def _fit_mixture(prims, rng, previous, options):
     """The frame's K-component GMM: from its schedule's start seeded by ``rng``, or from ``previous`` (warm start).
 
     ``previous`` is the previous frame's mixture or ``None`` (see :func:`_warm_start`).
     """
     schedule, k = options["schedule"], options["n_components"]
-    common = dict(variant=options["variant"], random_state=rng, reg_covar=REG_COVAR)
+    common = dict(variant=options["variant"], random_state=rng, reg_covar=REG_COVAR, memory_limit=EM_BLOCK_BYTES)
     if previous is not None and options["warm_iter"] is not None:
         weights, means, precisions = _warm_start(previous, prims, rng)
         return GaussianMixture(k, max_iter=options["warm_iter"], weights_init=weights, means_init=means,
                                precisions_init=precisions, **common).fit(prims)
     if schedule.seed_sample is None:
         return GaussianMixture(k, max_iter=schedule.em_iter, **common).fit(prims)
-    weights, means, precisions = _lloyd_start(prims, k, schedule, options["variant"], rng)
+    weights, means, precisions = lloyd_start(prims, k, schedule.seed_sample, schedule.lloyd_iter, options["variant"],
+                                             rng, REG_COVAR)
     return GaussianMixture(k, max_iter=schedule.em_iter, weights_init=weights, means_init=means,
                            precisions_init=precisions, **common).fit(prims)
 

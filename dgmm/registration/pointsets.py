@@ -4,10 +4,10 @@ from __future__ import annotations
 import time
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from dgmm.errors import InputError
 from dgmm.registration.checks import as_array, as_points
+from dgmm.registration.neighbours import TrackedNeighbours
 from dgmm.registration.pose import Registration
 
 
@@ -33,9 +33,13 @@ def kabsch(source, target, weights=None):
     w = np.ones(len(source)) if weights is None else as_array("weights", weights, (len(source),))
     if np.any(w < 0) or w.sum() <= 0:
         raise InputError("weights must be non-negative and not all zero")
-    w = w / w.sum()
-    source_mean, target_mean = w @ source, w @ target
-    cross = (source - source_mean).T @ ((target - target_mean) * w[:, None])
+    return _kabsch(source, target, w / w.sum())
+
+
+def _kabsch(source, target, weights):
+    """:func:`kabsch` on checked arrays, ``weights`` summing to one (ICP's inner loop calls it directly)."""
+    source_mean, target_mean = weights @ source, weights @ target
+    cross = (source - source_mean).T @ ((target - target_mean) * weights[:, None])
     u, _, vt = np.linalg.svd(cross)
     rotation = vt.T @ np.diag([1.0, 1.0, np.sign(np.linalg.det(vt.T @ u.T))]) @ u.T
     return rotation, target_mean - rotation @ source_mean
@@ -46,7 +50,9 @@ def register_icp(source, target, max_iter=50_000, tol=1e-9, callback=None):
 
     Every iteration pools source→target and target→source nearest-neighbour pairs (the target→source pairs
     weighted ``n_source / n_target`` so both directions count equally), takes the closed-form Kabsch step on
-    them, and stops when the weighted mean matching distance changes by less than ``tol``.
+    them, and stops when the weighted mean matching distance changes by less than ``tol``. The neighbours are exact
+    (:class:`~dgmm.registration.neighbours.TrackedNeighbours`: a k-d tree per side, built once, re-queried only
+    where the previous neighbours cannot be proven still nearest).
 
     Parameters
     ----------
@@ -67,24 +73,32 @@ def register_icp(source, target, max_iter=50_000, tol=1e-9, callback=None):
     if int(max_iter) < 1 or not tol >= 0:
         raise InputError(f"max_iter must be >= 1 and tol >= 0, got {max_iter} and {tol}")
     start = time.perf_counter()
-    target_tree = cKDTree(target)
-    back_weight = len(source) / len(target)
-    weights = np.concatenate([np.ones(len(source)), np.full(len(target), back_weight)])
+    # The moved point nearest to a target point p is the source point nearest to Rᵀ(p − t), at the same distance:
+    # both sides' points stay fixed, and the queries move a little per step.
+    forward, back = TrackedNeighbours(target), TrackedNeighbours(source)
+    n_source = len(source)
+    back_weight = n_source / len(target)
+    weights = np.concatenate([np.ones(n_source), np.full(len(target), back_weight)])
+    weights /= weights.sum()
+    # The pooled pairs (moved, matched target) then (matched moved, target), refilled in place every iteration.
+    pooled_source, pooled_target = np.empty((n_source + len(target), 3)), np.empty((n_source + len(target), 3))
+    pooled_target[n_source:] = target
     rotation, translation = np.eye(3), np.zeros(3)
     moved = source
     previous = np.inf
     converged = False
     iteration = 0
     while iteration < max_iter:
-        forward_dist, forward_idx = target_tree.query(moved)
-        back_dist, back_idx = cKDTree(moved).query(target)
-        error = (forward_dist.sum() + back_weight * back_dist.sum()) / (2 * len(source))
+        forward_dist, forward_idx = forward.query(moved)
+        back_dist, back_idx = back.query((target - translation) @ rotation)
+        error = (forward_dist.sum() + back_weight * back_dist.sum()) / (2 * n_source)
         if abs(previous - error) < tol:
             converged = True
             break
         previous = error
-        step_rotation, step_translation = kabsch(np.vstack([moved, moved[back_idx]]),
-                                                 np.vstack([target[forward_idx], target]), weights)
+        pooled_source[:n_source], pooled_source[n_source:] = moved, moved[back_idx]
+        pooled_target[:n_source] = target[forward_idx]
+        step_rotation, step_translation = _kabsch(pooled_source, pooled_target, weights)
         moved = moved @ step_rotation.T + step_translation
         rotation, translation = step_rotation @ rotation, step_rotation @ translation + step_translation
         iteration += 1

@@ -1,0 +1,89 @@
+"""Each odometry frame's EM start under a sampled schedule: k-means++ seeds on a sample of the primitives, Lloyd
+iterations on all of them, and the hard-label M-step (paper §V does not state the start; see
+:mod:`dgmm.odometry.frame_model`).
+
+Both steps are written out in numpy for speed: per frame, scikit-learn's ``kmeans_plusplus`` spent 10-14 ms on
+1,024 primitives and K = 100, nearly all of it validating its inputs once per seed, where the same greedy
+algorithm here takes about 2 ms; a Lloyd pass's distances are one matrix product of the points with a column of
+ones against the centres (``benchmarks/odometry_schedules.py``; the docs' Visual odometry section).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from dgmm.variants import VARIANTS
+
+_ROWS, _COLS = np.array([0, 1, 2, 0, 0, 1]), np.array([0, 1, 2, 1, 2, 2])  # the 6 distinct entries of a 3x3
+_FULL = np.array([[0, 3, 4], [3, 1, 5], [4, 5, 2]])  # each entry of the full 3x3 in those 6
+
+
+def kmeans_plusplus(points, weights, n_clusters, rng, n_trials=None):
+    """Greedy weighted k-means++ seeds (Arthur & Vassilvitskii; scikit-learn's ``kmeans_plusplus`` algorithm).
+
+    The first seed is drawn with probability ∝ weight; every later one is the best, by the weighted potential
+    ``Σ w · D²`` it leaves, of ``n_trials`` candidates drawn with probability ∝ ``w · D²`` (``D``: distance to the
+    nearest seed so far).
+
+    Parameters
+    ----------
+    points : ndarray of shape (n_points, 3)
+    weights : ndarray of shape (n_points,)
+        Non-negative, with at least ``n_clusters`` positive.
+    n_clusters : int
+    rng : numpy.random.Generator
+    n_trials : int, optional
+        Candidates per seed; default ``2 + int(log(n_clusters))``, as scikit-learn.
+
+    Returns
+    -------
+    indices : list of int
+        The seeds' rows of ``points``.
+    """
+    n_trials = 2 + int(np.log(n_clusters)) if n_trials is None else n_trials
+    points = points - points.mean(axis=0)  # |x - c|² by its expansion below loses less about the centre
+    norms = np.einsum("ij,ij->i", points, points)
+    chosen = [rng.choice(len(points), p=weights / weights.sum())]
+    closest = np.maximum(norms + norms[chosen[0]] - 2.0 * points @ points[chosen[0]], 0.0)
+    for _ in range(1, n_clusters):  # sequential by nature: each seed depends on the ones before
+        cumulative = np.cumsum(weights * closest)
+        candidates = np.minimum(np.searchsorted(cumulative, rng.random(n_trials) * cumulative[-1]), len(points) - 1)
+        reach = norms[candidates, None] - 2.0 * points[candidates] @ points.T
+        reach += norms
+        np.minimum(closest, reach, out=reach)
+        best = int(np.argmin(reach @ weights))
+        chosen.append(int(candidates[best]))
+        closest = np.maximum(reach[best], 0.0)
+    return chosen
+
+
+def lloyd_start(prims, n_components, seed_sample, lloyd_iter, variant, rng, reg_covar):
+    """Weights, means and precisions of the hard-label M-step after k-means++ seeds and Lloyd iterations.
+
+    The seeds are :func:`kmeans_plusplus` on ``seed_sample`` primitives drawn at random, weighted by their M-step
+    weights; ``lloyd_iter`` Lloyd iterations then run on every primitive's mean with those weights (a cluster left
+    empty keeps its centre). Each component takes its cluster's weight, weighted mean and covariance (the spread of
+    the primitives' means plus their own covariances, ``reg_covar`` on the diagonal), as ``GaussianMixture``'s
+    k-means start does; an empty cluster gets the median covariance and a weight of ``1e-3 / K``.
+    """
+    _, weights = VARIANTS[variant](prims.weights)
+    points = prims.means
+    sample = rng.choice(len(points), size=min(seed_sample, len(points)), replace=False)
+    centres = points[sample[kmeans_plusplus(points[sample], weights[sample], n_components, rng)]]
+    lifted = np.hstack([points, np.ones((len(points), 1))])
+    for _ in range(lloyd_iter + 1):  # the last pass only labels
+        # |x - c|² - |x|² = [x, 1] · [-2c, |c|²]: one product, the |x|² every row shares left out of the argmin
+        labels = (lifted @ np.vstack([-2.0 * centres.T, np.sum(centres ** 2, axis=1)])).argmin(axis=1)
+        mass = np.bincount(labels, weights, minlength=n_components)
+        present = mass > 0
+        sums = np.stack([np.bincount(labels, weights * points[:, d], minlength=n_components) for d in range(3)], 1)
+        centres[present] = sums[present] / mass[present, None]
+    offsets = points - centres[labels]
+    moments = offsets[:, _ROWS] * offsets[:, _COLS] + prims.covariances[:, _ROWS, _COLS]
+    covariances = np.stack([np.bincount(labels, weights * moments[:, m], minlength=n_components)
+                            for m in range(6)], 1)[:, _FULL]
+    covariances[present] /= mass[present, None, None]
+    if not present.all():
+        covariances[~present] = np.median(covariances[present], axis=0)
+        mass[~present] = 1e-3 * mass.sum() / n_components
+    covariances += reg_covar * np.eye(3)
+    return mass / mass.sum(), centres, np.linalg.inv(covariances)
