@@ -164,9 +164,9 @@ def test_seen_by_is_the_other_cameras_image():
 
 
 OVERLAP = replace(SCHEDULES["fast"], overlap_rounds=2, overlap_scales=(0.25, 0.125, 0.0625, 0.03125, 0.0),
-                  overlap_refit=True)
+                  overlap_refits=2)
 """The fast schedule's mixtures registered on the views' overlap: two rounds at each of five widenings, then both
-frames refitted on their common view."""
+frames refitted twice on their common view."""
 
 
 def _spinning_room(folder, scene, n_frames):

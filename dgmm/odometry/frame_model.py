@@ -83,9 +83,10 @@ class Schedule:
         (:func:`dgmm.odometry.overlap.register_d2d_overlap`); 0 registers the whole mixtures once.
     overlap_scales : tuple of float, default=(0.0,)
         Coarse-to-fine widening of those rounds, in RMS radii of the moving mixture, ending with 0.
-    overlap_refit : bool, default=False
+    overlap_refits : int, default=0
         After the rounds, refit both frames on the primitives the other camera sees and register them from the
-        rounds' pose (:func:`dgmm.odometry.overlap.register_d2d_common_view`; two more fits per frame).
+        pose so far, this many times (:func:`dgmm.odometry.overlap.register_d2d_common_view`; two more fits per
+        frame each).
     """
 
     seed_sample: int | None
@@ -94,7 +95,7 @@ class Schedule:
     solver: str
     overlap_rounds: int = 0
     overlap_scales: tuple = (0.0,)
-    overlap_refit: bool = False
+    overlap_refits: int = 0
 
 
 SCHEDULES = {
@@ -127,10 +128,10 @@ def _fit_mixture(prims, rng, previous, options):
 
 
 def _view_mixture(prims, rng, previous, options):
-    """The frame's mixture; with ``overlap_refit`` it also keeps its primitives (``primitives_``) and a seed for
+    """The frame's mixture; with ``overlap_refits`` it also keeps its primitives (``primitives_``) and a seed for
     its refits on common views (``refit_seed_``, drawn from the frame's ``rng`` after the fit)."""
     mixture = _fit_mixture(prims, rng, previous, options)
-    if options["schedule"].overlap_refit:
+    if options["schedule"].overlap_refits:
         mixture.primitives_, mixture.refit_seed_ = prims, int(rng.integers(np.iinfo(np.int64).max))
     return mixture
 
@@ -150,14 +151,15 @@ def _prepare_icp(depth, intrinsics, rng, previous, options):
 
 def _register_d2d(fixed, moving, options):
     schedule = options["schedule"]
-    if schedule.overlap_refit:
+    if schedule.overlap_refits:
         views = fixed, moving
 
         def fit(prims, frame):  # every refit of a frame from its own seed: the same bytes run to run
             return _fit_mixture(prims, np.random.default_rng(views[frame].refit_seed_), None, options)
 
         return register_d2d_common_view(*((view, view.primitives_) for view in views), fit, options["intrinsics"],
-                                        max(schedule.overlap_rounds, 1), schedule.overlap_scales, schedule.solver)
+                                        schedule.overlap_refits, max(schedule.overlap_rounds, 1),
+                                        schedule.overlap_scales, schedule.solver)
     if schedule.overlap_rounds:
         return register_d2d_overlap(fixed, moving, options["intrinsics"], schedule.overlap_rounds,
                                     schedule.overlap_scales, schedule.solver)
