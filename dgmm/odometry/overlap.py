@@ -10,8 +10,8 @@ A coarse-to-fine schedule (both mixtures widened, then narrowed, as :mod:`dgmm.c
 finds the right basin where the first registration of the whole mixtures does not; widened without the overlap,
 the same schedule only adds a bias (wide components match the views' whole extents). Whole components still keep
 the tiles that straddle the other view's edge: :func:`register_d2d_common_view` then refits both frames on the
-primitives the other camera sees and registers them from that pose (every frame of the room within 2.2 cm, both
-EMs, three spins; at about four times the fast schedule's CPU per frame).
+primitives the other camera sees and registers them from that pose; with two refits every frame of the room is
+within 2.1 cm (three spins, both EMs), at about five times the fast schedule's CPU per frame.
 """
 from __future__ import annotations
 
