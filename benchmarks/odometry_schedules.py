@@ -3,7 +3,8 @@
 On one BLAS thread (as the workflow's jobs run), over the first N depth frames of a TUM sequence (fr1/xyz from the
 mirror by default, all 798 frames): each method and EM variant under each schedule, a name of
 ``dgmm.odometry.frame_model.SCHEDULES`` or ``SEED_SAMPLE:LLOYD_ITER:EM_ITER:SOLVER`` (a ``Schedule``; SEED_SAMPLE
-``all`` for scikit-learn's k-means on every primitive). Prints one markdown row per run: ATE RMSE, the one-second
+``all`` for scikit-learn's k-means on every primitive), optionally followed by ``:OVERLAP_ROUNDS``,
+``:SCALE,SCALE,...`` and ``:REFITS`` (the overlap fields). Prints one markdown row per run: ATE RMSE, the one-second
 RPE, CPU seconds per frame (fit + D2D; the machine may be shared, so CPU time, not wall time) and the worst
 frame-to-frame error against the ground truth.
 
@@ -26,11 +27,14 @@ FR1_XYZ = Path(__file__).resolve().parents[2] / "shared" / "data" / "tum" / "rgb
 
 
 def parse_schedule(text):
-    """A SCHEDULES name, or ``SEED_SAMPLE:LLOYD_ITER:EM_ITER:SOLVER``."""
+    """A SCHEDULES name, or ``SEED_SAMPLE:LLOYD_ITER:EM_ITER:SOLVER[:OVERLAP_ROUNDS[:SCALE,...[:REFITS]]]``."""
     if text in SCHEDULES:
         return SCHEDULES[text]
-    sample, lloyd_iter, em_iter, solver = text.split(":")
-    return Schedule(None if sample == "all" else int(sample), int(lloyd_iter), int(em_iter), solver)
+    sample, lloyd_iter, em_iter, solver, *overlap = text.split(":")
+    rounds = int(overlap[0]) if overlap else 0
+    scales = tuple(float(scale) for scale in overlap[1].split(",")) if len(overlap) > 1 else (0.0,)
+    return Schedule(None if sample == "all" else int(sample), int(lloyd_iter), int(em_iter), solver, rounds, scales,
+                    int(overlap[2]) if len(overlap) > 2 else 0)
 
 
 def frame_errors(trajectory, groundtruth):

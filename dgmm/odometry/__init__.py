@@ -7,6 +7,7 @@ The public namespace; one concept per module:
 - :mod:`~dgmm.odometry.frame_model`: each method's per-frame model (a GMM, or ICP's points), the per-frame
   schedules of the GMMs (EM start, EM iterations, D2D solver) and the registration of two frames;
 - :mod:`~dgmm.odometry.em_start`: a frame's EM start under a sampled schedule (k-means++ seeds, Lloyd iterations);
+- :mod:`~dgmm.odometry.overlap`: D2D of two frames' mixtures on what both cameras see (robust to fast rotation);
 - :mod:`~dgmm.odometry.loop`: the odometry loop composing frame-to-frame registrations into a trajectory;
 - :mod:`~dgmm.odometry.metrics`: ATE and RPE of TUM's benchmark;
 - :mod:`~dgmm.odometry.synthetic`: a ray-cast TUM-format sequence of a room (imported on its own: trimesh);

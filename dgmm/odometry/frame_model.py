@@ -23,6 +23,7 @@ import numpy as np
 
 from dgmm.mixture import GaussianMixture
 from dgmm.odometry.em_start import lloyd_start
+from dgmm.odometry.overlap import register_d2d_common_view, register_d2d_overlap
 from dgmm.odometry.pixels import backproject, pixel_primitives
 from dgmm.primitives import Primitives
 from dgmm.registration import register_d2d, register_icp
@@ -78,12 +79,24 @@ class Schedule:
         M-step that only a bound would need: ``GaussianMixture(tol=None)``).
     solver : {"bfgs", "gauss-newton"}
         D2D's solver (``dgmm.registration.register_d2d``).
+    overlap_rounds : int, default=0
+        Rounds of D2D, at each of ``overlap_scales``, on the components the other frame's camera sees
+        (:func:`dgmm.odometry.overlap.register_d2d_overlap`); 0 registers the whole mixtures once.
+    overlap_scales : tuple of float, default=(0.0,)
+        Coarse-to-fine widening of those rounds, in RMS radii of the moving mixture, ending with 0.
+    overlap_refits : int, default=0
+        After the rounds, refit both frames on the primitives the other camera sees and register them from the
+        pose so far, this many times (:func:`dgmm.odometry.overlap.register_d2d_common_view`; two more fits per
+        frame each).
     """
 
     seed_sample: int | None
     lloyd_iter: int
     em_iter: int
     solver: str
+    overlap_rounds: int = 0
+    overlap_scales: tuple = (0.0,)
+    overlap_refits: int = 0
 
 
 SCHEDULES = {
@@ -115,12 +128,21 @@ def _fit_mixture(prims, rng, previous, options):
                            precisions_init=precisions, **common).fit(prims)
 
 
+def _view_mixture(prims, rng, previous, options):
+    """The frame's mixture; with ``overlap_refits`` it also keeps its primitives (``primitives_``) and a seed for
+    its refits on common views (``refit_seed_``, drawn from the frame's ``rng`` after the fit)."""
+    mixture = _fit_mixture(prims, rng, previous, options)
+    if options["schedule"].overlap_refits:
+        mixture.primitives_, mixture.refit_seed_ = prims, int(rng.integers(np.iinfo(np.int64).max))
+    return mixture
+
+
 def _prepare_pixels(depth, intrinsics, rng, previous, options):
-    return _fit_mixture(pixel_primitives(depth, intrinsics, size=options["size"]), rng, previous, options)
+    return _view_mixture(pixel_primitives(depth, intrinsics, size=options["size"]), rng, previous, options)
 
 
 def _prepare_points(depth, intrinsics, rng, previous, options):
-    return _fit_mixture(Primitives.from_points(backproject(depth, intrinsics)), rng, previous, options)
+    return _view_mixture(Primitives.from_points(backproject(depth, intrinsics)), rng, previous, options)
 
 
 def _prepare_icp(depth, intrinsics, rng, previous, options):
@@ -129,7 +151,20 @@ def _prepare_icp(depth, intrinsics, rng, previous, options):
 
 
 def _register_d2d(fixed, moving, options):
-    return register_d2d(fixed, moving, solver=options["schedule"].solver)
+    schedule = options["schedule"]
+    if schedule.overlap_refits:
+        views = fixed, moving
+
+        def fit(prims, frame):  # every refit of a frame from its own seed: the same bytes run to run
+            return _fit_mixture(prims, np.random.default_rng(views[frame].refit_seed_), None, options)
+
+        return register_d2d_common_view(*((view, view.primitives_) for view in views), fit, options["intrinsics"],
+                                        schedule.overlap_refits, max(schedule.overlap_rounds, 1),
+                                        schedule.overlap_scales, schedule.solver)
+    if schedule.overlap_rounds:
+        return register_d2d_overlap(fixed, moving, options["intrinsics"], schedule.overlap_rounds,
+                                    schedule.overlap_scales, schedule.solver)
+    return register_d2d(fixed, moving, solver=schedule.solver)
 
 
 def _register_icp(fixed, moving, options):

@@ -133,7 +133,7 @@ def run_odometry(sequence, method, frames=None, *, intrinsics=FR3, n_components=
     prepare, register = METHODS[method]
     options = {"n_components": n_components, "warm_iter": warm_iter,
                "schedule": schedule if isinstance(schedule, Schedule) else SCHEDULES[schedule], "variant": variant,
-               "size": size, "n_icp_points": n_icp_points, "icp_tol": icp_tol}
+               "size": size, "n_icp_points": n_icp_points, "icp_tol": icp_tol, "intrinsics": intrinsics}
     rotations, translations = [np.eye(3)], [np.zeros(3)]
     previous, prepare_seconds, registrations, cpu_seconds = None, [], [], []
     for index in indices:  # sequential by nature: each pose composes the previous one
