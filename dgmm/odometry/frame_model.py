@@ -23,8 +23,9 @@ import numpy as np
 
 from dgmm.mixture import GaussianMixture
 from dgmm.odometry.em_start import lloyd_start
+from dgmm.odometry.measured_cut import MeasuredFrame, register_measured
 from dgmm.odometry.overlap import register_d2d_common_view, register_d2d_overlap
-from dgmm.odometry.pixels import backproject, pixel_primitives
+from dgmm.odometry.pixels import PIXEL_STEP, backproject, pixel_primitives
 from dgmm.primitives import Primitives
 from dgmm.registration import register_d2d, register_icp
 
@@ -88,6 +89,10 @@ class Schedule:
         After the rounds, refit both frames on the primitives the other camera sees and register them from the
         pose so far, this many times (:func:`dgmm.odometry.overlap.register_d2d_common_view`; two more fits per
         frame each).
+    cut_unseen : bool, default=False
+        Then cut both mixtures to the primitives the other frame measures at that pose and register them from it
+        (:func:`dgmm.odometry.measured_cut.register_measured`): what only one frame measured pulls D2D toward the
+        identity.
     """
 
     seed_sample: int | None
@@ -97,6 +102,7 @@ class Schedule:
     overlap_rounds: int = 0
     overlap_scales: tuple = (0.0,)
     overlap_refits: int = 0
+    cut_unseen: bool = False
 
 
 SCHEDULES = {
@@ -128,21 +134,28 @@ def _fit_mixture(prims, rng, previous, options):
                            precisions_init=precisions, **common).fit(prims)
 
 
-def _view_mixture(prims, rng, previous, options):
+def _view_mixture(prims, depth, intrinsics, rng, previous, options):
     """The frame's mixture; with ``overlap_refits`` it also keeps its primitives (``primitives_``) and a seed for
-    its refits on common views (``refit_seed_``, drawn from the frame's ``rng`` after the fit)."""
+    its refits on common views (``refit_seed_``, drawn from the frame's ``rng`` after the fit); with ``cut_unseen``
+    it is a :class:`~dgmm.odometry.measured_cut.MeasuredFrame` (the mixture, its primitives, its measured pixels)."""
+    schedule = options["schedule"]
     mixture = _fit_mixture(prims, rng, previous, options)
-    if options["schedule"].overlap_refits:
+    if schedule.overlap_refits:
         mixture.primitives_, mixture.refit_seed_ = prims, int(rng.integers(np.iinfo(np.int64).max))
+    if schedule.cut_unseen:
+        return MeasuredFrame(mixture, prims, np.asarray(depth)[::PIXEL_STEP, ::PIXEL_STEP] > 0, intrinsics,
+                             PIXEL_STEP, options["variant"])
     return mixture
 
 
 def _prepare_pixels(depth, intrinsics, rng, previous, options):
-    return _view_mixture(pixel_primitives(depth, intrinsics, size=options["size"]), rng, previous, options)
+    prims = pixel_primitives(depth, intrinsics, size=options["size"])
+    return _view_mixture(prims, depth, intrinsics, rng, previous, options)
 
 
 def _prepare_points(depth, intrinsics, rng, previous, options):
-    return _view_mixture(Primitives.from_points(backproject(depth, intrinsics)), rng, previous, options)
+    prims = Primitives.from_points(backproject(depth, intrinsics))
+    return _view_mixture(prims, depth, intrinsics, rng, previous, options)
 
 
 def _prepare_icp(depth, intrinsics, rng, previous, options):
@@ -158,13 +171,18 @@ def _register_d2d(fixed, moving, options):
         def fit(prims, frame):  # every refit of a frame from its own seed: the same bytes run to run
             return _fit_mixture(prims, np.random.default_rng(views[frame].refit_seed_), None, options)
 
-        return register_d2d_common_view(*((view, view.primitives_) for view in views), fit, options["intrinsics"],
-                                        schedule.overlap_refits, max(schedule.overlap_rounds, 1),
-                                        schedule.overlap_scales, schedule.solver)
-    if schedule.overlap_rounds:
-        return register_d2d_overlap(fixed, moving, options["intrinsics"], schedule.overlap_rounds,
-                                    schedule.overlap_scales, schedule.solver)
-    return register_d2d(fixed, moving, solver=schedule.solver)
+        registration = register_d2d_common_view(*((view, view.primitives_) for view in views), fit,
+                                                options["intrinsics"], schedule.overlap_refits,
+                                                max(schedule.overlap_rounds, 1), schedule.overlap_scales,
+                                                schedule.solver)
+    elif schedule.overlap_rounds:
+        registration = register_d2d_overlap(fixed, moving, options["intrinsics"], schedule.overlap_rounds,
+                                            schedule.overlap_scales, schedule.solver)
+    else:
+        registration = register_d2d(fixed, moving, solver=schedule.solver)
+    if schedule.cut_unseen:
+        return register_measured(fixed, moving, registration, schedule.solver)
+    return registration
 
 
 def _register_icp(fixed, moving, options):
