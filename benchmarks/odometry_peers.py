@@ -108,7 +108,7 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("sequence", nargs="?", default=str(FR1_XYZ))
     parser.add_argument("--frames", type=int, default=10_000)
-    parser.add_argument("--schedules", nargs="*", default=["fast"])
+    parser.add_argument("--schedules", nargs="*", default=["overlap"])
     parser.add_argument("--variants", nargs="+", default=["textbook", "authors"])
     parser.add_argument("--methods", nargs="*", default=["gmm-pixels", "gmm-points", "icp"])
     parser.add_argument("--icp-tol", type=float, default=1e-9, help="our ICP's stopping tolerance (m)")

@@ -137,5 +137,5 @@ def test_unknown_schedule_is_one_line_exit_2_and_no_output(tmp_path):
     run = dgmm_odometry(folder, "--schedule", "fastest", "-o", tmp_path / "t.txt", "--rrd", tmp_path / "o.rrd")
     assert run.returncode == 2, run.stderr
     assert run.stdout == "" and run.stderr.count("\n") == 1
-    assert "schedule must be one of ['fast', 'reference']" in run.stderr
+    assert "schedule must be one of ['common-view', 'fast', 'overlap', 'reference']" in run.stderr
     assert sorted(p.name for p in tmp_path.iterdir()) == [folder.name]

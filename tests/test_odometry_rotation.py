@@ -8,7 +8,6 @@ closed-form cluster statistics of well-separated blobs, pixel coordinates chosen
 motion-capture ground truth composed with the rotations the test applies itself, and the room's ray-cast ground
 truth.
 """
-from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -163,8 +162,7 @@ def test_seen_by_is_the_other_cameras_image():
     np.testing.assert_array_equal(seen_by(points, turn, shift, FR3), [True, True, True, False, False, False, False])
 
 
-OVERLAP = replace(SCHEDULES["fast"], overlap_rounds=2, overlap_scales=(0.25, 0.125, 0.0625, 0.03125, 0.0),
-                  overlap_refits=2)
+COMMON_VIEW = SCHEDULES["common-view"]
 """The fast schedule's mixtures registered on the views' overlap: two rounds at each of five widenings, then both
 frames refitted twice on their common view."""
 
@@ -196,7 +194,7 @@ def test_registration_on_the_common_view_holds_where_whole_mixtures_slide(bunny_
     within 2° and 3 cm of the rendered truth."""
     sequence = _spinning_room(tmp_path / "spin", room_scene([bunny_res4.triangles]), 2)
     whole = _frame_errors(sequence, SCHEDULES["fast"], variant)[0]
-    overlap = _frame_errors(sequence, OVERLAP, variant)[0]
+    overlap = _frame_errors(sequence, COMMON_VIEW, variant)[0]
     print(f"\n{variant}: whole mixtures {whole[0]:.2f}° {100 * whole[1]:.2f} cm, common view {overlap[0]:.2f}° "
           f"{100 * overlap[1]:.2f} cm", end="")
     assert whole[0] > MAX_DEG or whole[1] > MAX_M
@@ -205,12 +203,12 @@ def test_registration_on_the_common_view_holds_where_whole_mixtures_slide(bunny_
 
 @pytest.mark.slow
 def test_no_gross_failure_on_the_spinning_room(bunny_res4, tmp_path):
-    """40 frames of the spinning room (true steps up to 7.3°): with the overlap schedule every frame-to-frame
+    """40 frames of the spinning room (true steps up to 7.3°): with the common-view schedule every frame-to-frame
     registration is within 2° and 3 cm of the rendered truth, with either EM; with the fast schedule some are not
     (walls 3-4.5 m away fill most of the view, and a tenth of it changes per frame)."""
     sequence = _spinning_room(tmp_path / "spin", room_scene([bunny_res4.triangles]), 40)
     for variant in ("textbook", "authors"):
-        errors = _frame_errors(sequence, OVERLAP, variant)
+        errors = _frame_errors(sequence, COMMON_VIEW, variant)
         plain = _frame_errors(sequence, SCHEDULES["fast"], variant)
         print(f"\n{variant}: overlap worst {errors[:, 0].max():.2f}° {100 * errors[:, 1].max():.2f} cm; fast: "
               f"{np.sum((plain[:, 0] > MAX_DEG) | (plain[:, 1] > MAX_M))} frames off", end="")

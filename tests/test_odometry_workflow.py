@@ -81,7 +81,7 @@ def test_table_has_every_run_with_finite_metrics_and_the_missing_sequence(stage)
                              "rpe_translation_m_s", "rpe_rotation_deg_s", "missing_folder"]
     *rows, pending = rows
     assert [(row["method"], row["variant"]) for row in rows] == list(RUNS.values())
-    assert [row["schedule"] for row in rows] == ["fast", "fast", ""]  # tests/config.yaml's; ICP has none
+    assert [row["schedule"] for row in rows] == ["overlap", "overlap", ""]  # tests/config.yaml's; ICP has none
     for row in rows:
         assert row["sequence"] == "synthetic" and int(row["frames"]) == N_FRAMES and row["missing_folder"] == ""
         assert math.isfinite(float(row["ate_rmse_m"])) and float(row["ate_rmse_m"]) >= 0

@@ -77,7 +77,7 @@ class Odometry:
     cpu_seconds: np.ndarray
 
 
-def run_odometry(sequence, method, frames=None, *, intrinsics=FR3, n_components=100, schedule="fast", warm_iter=None,
+def run_odometry(sequence, method, frames=None, *, intrinsics=FR3, n_components=100, schedule="overlap", warm_iter=None,
                  variant="textbook", size="area", n_icp_points=2500, icp_tol=1e-9, seed=0, callback=None):
     """Frame-to-frame visual odometry over a TUM sequence (paper §V).
 
@@ -93,7 +93,7 @@ def run_odometry(sequence, method, frames=None, *, intrinsics=FR3, n_components=
     intrinsics : dgmm.odometry.pixels.Intrinsics, default=FR3
     n_components : int
         GMM size (paper: K=100).
-    schedule : str or Schedule, default="fast"
+    schedule : str or Schedule, default="overlap"
         How each frame's GMM starts and iterates and which D2D solver registers it: a key of
         ``dgmm.odometry.frame_model.SCHEDULES`` or a ``Schedule``.
     warm_iter : int, optional

@@ -174,9 +174,11 @@ FIGURES = (
                "Top-down trajectories of frame-to-frame odometry (drawn by the odometry stage): GMM D2D with pixel "
                "primitives, GMM D2D with plain points, and point-to-point ICP, against the ground truth. Its ATE "
                "numbers are in the claims above. Each GMM run's per-frame schedule is the `schedule` column of "
-               "odometry.csv (config `odometry.schedule`): `fast`, the sweep's, chosen by measurement (k-means++ "
-               "seeds from 1,024 pixels, 3 Lloyd and 2 EM iterations, Gauss-Newton D2D), or `reference` (k-means "
-               "+ 25 EM iterations, the paper's BFGS; the paper does not state its odometry's)."),
+               "odometry.csv (config `odometry.schedule`): `overlap`, the sweep's, chosen by measurement (k-means++ "
+               "seeds from 1,024 pixels, 3 Lloyd and 2 EM iterations, Gauss-Newton D2D on what each frame sees and "
+               "measures of the other), `fast` (the same mixtures, D2D of the whole mixtures), `common-view` (both "
+               "frames refitted on their common view) or `reference` (k-means + 25 EM iterations, the paper's BFGS; "
+               "the paper does not state its odometry's)."),
     FigureSpec("fig7", "Fig 7: input and output representations", figures.MESH_KEYS, (),
                lambda data: figures.fig7_representations(data.meshes, figures.pictured_mixtures(data.meshes,
                                                                                                  data.seed)),
