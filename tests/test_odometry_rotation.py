@@ -210,7 +210,7 @@ def test_no_gross_failure_on_the_spinning_room(bunny_res4, tmp_path):
     for variant in ("textbook", "authors"):
         errors = _frame_errors(sequence, COMMON_VIEW, variant)
         plain = _frame_errors(sequence, SCHEDULES["fast"], variant)
-        print(f"\n{variant}: overlap worst {errors[:, 0].max():.2f}° {100 * errors[:, 1].max():.2f} cm; fast: "
+        print(f"\n{variant}: common view worst {errors[:, 0].max():.2f}° {100 * errors[:, 1].max():.2f} cm; fast: "
               f"{np.sum((plain[:, 0] > MAX_DEG) | (plain[:, 1] > MAX_M))} frames off", end="")
         assert errors[:, 0].max() < MAX_DEG and errors[:, 1].max() < MAX_M
         assert plain[:, 0].max() > MAX_DEG or plain[:, 1].max() > MAX_M
