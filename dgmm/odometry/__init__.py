@@ -8,6 +8,7 @@ The public namespace; one concept per module:
   schedules of the GMMs (EM start, EM iterations, D2D solver) and the registration of two frames;
 - :mod:`~dgmm.odometry.em_start`: a frame's EM start under a sampled schedule (k-means++ seeds, Lloyd iterations);
 - :mod:`~dgmm.odometry.overlap`: D2D of two frames' mixtures on what both cameras see (robust to fast rotation);
+- :mod:`~dgmm.odometry.measured_cut`: D2D of two frames on the primitives each measures of the other;
 - :mod:`~dgmm.odometry.loop`: the odometry loop composing frame-to-frame registrations into a trajectory;
 - :mod:`~dgmm.odometry.metrics`: ATE and RPE of TUM's benchmark;
 - :mod:`~dgmm.odometry.synthetic`: a ray-cast TUM-format sequence of a room (imported on its own: trimesh);
