@@ -1,7 +1,7 @@
 """Claims about convergence (Discussion, Introduction, Conclusion), from the 100-iteration fits of
 ``convergence.csv`` (:mod:`dgmm.checks.convergence`: the Fig 3 sweep's seeds run on to 100 iterations)."""
-from dgmm.report.claims.rules import (CLOSE_NATS, REPRODUCED, SHARE_RULE, VARIANTS, VARIANT_NAMES, Claim, Grade, lost,
-                                      mean, median, missing, pending, ratio_verdict, same, share_verdict)
+from dgmm.report.claims.rules import (CLOSE_NATS, REPRODUCED, SHARE_RULE, Claim, Grade, lost, mean, median, missing,
+                                      pending, per_variant, ratio_verdict, same, share_verdict)
 
 CONVERGED = "n_iter_within_0.01"
 """Iterations the bound took to come within 0.01 nat of its value after 100 (convergence.csv)."""
@@ -26,21 +26,20 @@ def converges_in_a_third(data):
     rule = ("median over fits of the iterations until the bound is within 0.01 nat of its 100-iteration value, "
             "exact mesh / point inputs (centroids, vertices), same K, start and seed: ≤ 0.5 reproduced, < 1 partly, "
             "else not reproduced")
-    grades, lines = {}, []
-    for variant in VARIANTS:
+
+    def grade(variant):
         fits = _fits(data, variant)
         if not fits:
-            grades[variant] = missing(WHAT)
-            continue
+            return missing(WHAT)
         exact = median([int(fit["exact"][CONVERGED]) for fit in fits.values()])
         points = median([int(row[CONVERGED]) for fit in fits.values() for row in fit["points"]])
         ratio = exact / points
         verdict = ratio_verdict(ratio, (0.0, 0.5), (0.0, 1.0 - 1e-12))
-        lines.append(f"{VARIANT_NAMES[variant]}: median {exact:g} iterations (exact) vs {points:g} (points), "
-                     f"{len(fits)} fits")
-        grades[variant] = Grade(verdict, f"{exact:g} / {points:g} = {ratio:.2f}",
-                                "" if verdict == REPRODUCED else
-                                f"The exact mesh needs a median {exact:g} iterations against the points' {points:g}.")
+        return (Grade(verdict, f"{exact:g} / {points:g} = {ratio:.2f}", "" if verdict == REPRODUCED else
+                      f"The exact mesh needs a median {exact:g} iterations against the points' {points:g}."),
+                f"median {exact:g} iterations (exact) vs {points:g} (points), {len(fits)} fits")
+
+    grades, lines = per_variant(grade)
     return Claim(section, title, rule, "; ".join(lines) + ".", grades, "≈ 1/3")
 
 
@@ -49,19 +48,20 @@ def converges_faster(data):
     section, title = "§I, §VI", "Mesh GMMs converge faster than point GMMs"
     rule = (f"{SHARE_RULE}; a comparison is one (K, start, seed, point input): the exact mesh reaches 0.01 nat of its "
             "100-iteration bound in fewer iterations")
-    grades, lines = {}, []
-    for variant in VARIANTS:
+
+    def grade(variant):
         fits = _fits(data, variant)
         if not fits:
-            grades[variant] = missing(WHAT)
-            continue
+            return missing(WHAT)
         pairs = [(key, int(fit["exact"][CONVERGED]), int(row[CONVERGED]), row["input"])
                  for key, fit in fits.items() for row in fit["points"]]
         failed = [f"K={k} {init} seed {seed}: exact {e} vs {name} {p}" for (k, init, seed), e, p, name in pairs
                   if not e < p]
         wins = len(pairs) - len(failed)
-        lines.append(f"{VARIANT_NAMES[variant]}: faster in {wins} of {len(pairs)}")
-        grades[variant] = Grade(share_verdict(wins, len(pairs)), f"{wins}/{len(pairs)} faster", lost(failed))
+        return (Grade(share_verdict(wins, len(pairs)), f"{wins}/{len(pairs)} faster", lost(failed)),
+                f"faster in {wins} of {len(pairs)}")
+
+    grades, lines = per_variant(grade)
     return Claim(section, title, rule, "; ".join(lines) + ".", grades, "faster")
 
 
@@ -91,12 +91,11 @@ def points_nearly_match_at_100(data):
     section, title = "§IV-C", "At 100 iterations point inputs are nearly as good as the exact mesh"
     rule = (f"{SHARE_RULE}; a comparison is one (K, start): the best point input's mean eval log-likelihood at 100 "
             f"iterations is within {CLOSE_NATS} nat below the exact mesh's (or above it)")
-    grades, lines = {}, []
-    for variant in VARIANTS:
+
+    def grade(variant):
         fits = _fits(data, variant)
         if not fits:
-            grades[variant] = missing(WHAT)
-            continue
+            return missing(WHAT)
         groups = {}
         for (k, init, seed), fit in fits.items():
             group = groups.setdefault((k, init), {"exact": [], "points": {}})
@@ -107,10 +106,11 @@ def points_nearly_match_at_100(data):
                 for key, group in groups.items()}
         failed = [f"K={k} {init} {gap:+.2f}" for (k, init), gap in gaps.items() if gap > CLOSE_NATS]
         wins = len(gaps) - len(failed)
-        lines.append(f"{VARIANT_NAMES[variant]}: exact − best points at 100 iterations "
-                     + ", ".join(f"K={k} {init} {gap:+.2f}" for (k, init), gap in gaps.items()))
-        grades[variant] = Grade(share_verdict(wins, len(gaps)), f"{wins}/{len(gaps)} within {CLOSE_NATS}",
-                                lost(failed))
+        return (Grade(share_verdict(wins, len(gaps)), f"{wins}/{len(gaps)} within {CLOSE_NATS}", lost(failed)),
+                "exact − best points at 100 iterations "
+                + ", ".join(f"K={k} {init} {gap:+.2f}" for (k, init), gap in gaps.items()))
+
+    grades, lines = per_variant(grade)
     return Claim(section, title, rule, "; ".join(lines) + ".", grades, "nearly as good")
 
 

@@ -1,9 +1,8 @@
 """Claims of §IV-B "Mesh Decimation" and the Discussion (Fig 4: the full bunny reduced to about 1000 primitives)."""
 from dgmm.report.claims.fitting import robust_to_init
 from dgmm.report.claims.rules import (CLOSE_NATS, FIG3_INPUTS, FIG3_MODEL, FIG4_INPUTS, OFTEN_RULE, REPRODUCED,
-                                      ROBUST_NATS, SAME_NATS, SHARE_RULE, VARIANTS, VARIANT_NAMES, Claim, Grade, best,
-                                      cells, init_gaps, is_mesh, lost, missing, often_verdict, pending, same,
-                                      share_verdict)
+                                      ROBUST_NATS, SAME_NATS, SHARE_RULE, Claim, Grade, best, cells, init_gaps, is_mesh,
+                                      lost, missing, often_verdict, pending, per_variant, same, share_verdict)
 
 POISSON, RANDOM = "poisson1000-points", "random1000-points"
 QUADRIC, CLUSTERING = "quadric1000-exact", "clustering1000-exact"
@@ -14,20 +13,21 @@ HIGH_K = 200
 def _pairwise(data, section, title, winner, loser, paper_words, cause):
     """``winner`` scores above ``loser`` in every (init, K) both were fitted (share rule), per EM."""
     rule = f"{SHARE_RULE}; a comparison is one (init, K): {winner} > {loser}"
-    grades, lines = {}, []
-    for variant in VARIANTS:
+
+    def grade(variant):
         table = {key: cell for key, cell in cells(data.means, FIG3_MODEL, FIG4_INPUTS, variant).items()
                  if {winner, loser} <= cell.keys()}
         if not table:
-            grades[variant] = missing(f"{winner} and {loser} fits in likelihood.csv")
-            continue
+            return missing(f"{winner} and {loser} fits in likelihood.csv")
         failed = [f"{init} K={k} {cell[winner]:.2f} ≤ {cell[loser]:.2f}" for (init, k), cell in table.items()
                   if not cell[winner] > cell[loser]]
         wins = len(table) - len(failed)
         margin = sorted(cell[winner] - cell[loser] for cell in table.values())[len(table) // 2]
-        lines.append(f"{VARIANT_NAMES[variant]}: {wins} of {len(table)}, median margin {margin:+.2f} nat")
-        grades[variant] = Grade(share_verdict(wins, len(table)), f"{wins}/{len(table)}, median {margin:+.2f}",
-                                f"{cause} {lost(failed)}" if failed else "")
+        return (Grade(share_verdict(wins, len(table)), f"{wins}/{len(table)}, median {margin:+.2f}",
+                      f"{cause} {lost(failed)}" if failed else ""),
+                f"{wins} of {len(table)}, median margin {margin:+.2f} nat")
+
+    grades, lines = per_variant(grade)
     if not (is_mesh(winner) or is_mesh(loser)):
         grades = same(grades["textbook"])
         lines = lines[-1:]
@@ -52,21 +52,21 @@ def poisson_kmeans_often_best(data):
     section, title = "Fig 4", "The best results often come from Poisson-disk samples with k-means"
     rule = (f"{OFTEN_RULE}; a comparison is one K, won when Poisson k-means is within {SAME_NATS} nat of the best "
             "Fig 4 fit (any input, either start)")
-    grades, lines = {}, []
-    for variant in VARIANTS:
+
+    def grade(variant):
         table = cells(data.means, FIG3_MODEL, FIG4_INPUTS, variant)
         ks = sorted({k for init, k in table if POISSON in table.get(("kmeans", k), {})})
         if not ks:
-            grades[variant] = missing("Poisson k-means fits in likelihood.csv")
-            continue
+            return missing("Poisson k-means fits in likelihood.csv")
         tops = {k: max((best(cell, FIG4_INPUTS), f"{name} {init}") for (init, kk), cell in table.items() if kk == k
                        for name in [max(cell, key=cell.get)]) for k in ks}
         failed = [f"K={k} {table[('kmeans', k)][POISSON]:.2f} vs {tops[k][1]} {tops[k][0]:.2f}" for k in ks
                   if table[("kmeans", k)][POISSON] < tops[k][0] - SAME_NATS]
         wins = len(ks) - len(failed)
-        lines.append(f"{VARIANT_NAMES[variant]}: {wins} of {len(ks)} K")
-        grades[variant] = Grade(often_verdict(wins, len(ks)), f"{wins}/{len(ks)} K",
-                                f"The mesh fits score higher. {lost(failed)}" if failed else "")
+        return (Grade(often_verdict(wins, len(ks)), f"{wins}/{len(ks)} K",
+                      f"The mesh fits score higher. {lost(failed)}" if failed else ""), f"{wins} of {len(ks)} K")
+
+    grades, lines = per_variant(grade)
     return Claim(section, title, rule, "; ".join(lines) + ".", grades, "often best")
 
 
@@ -75,8 +75,8 @@ def random_samples_lowest(data):
     section, title = "Fig 4", "Random samples give the lowest-quality fits"
     rule = (f"{SHARE_RULE}; a comparison is one K: random samples' better start is within {SAME_NATS} nat of the "
             "lowest of the inputs' better starts")
-    grades, lines = {}, []
-    for variant in VARIANTS:
+
+    def grade(variant):
         table = cells(data.means, FIG3_MODEL, FIG4_INPUTS, variant)
         by_k = {}
         for (init, k), cell in table.items():
@@ -84,14 +84,15 @@ def random_samples_lowest(data):
                 by_k.setdefault(k, {})[name] = max(value, by_k.get(k, {}).get(name, value))
         by_k = {k: inputs for k, inputs in by_k.items() if RANDOM in inputs and len(inputs) > 1}
         if not by_k:
-            grades[variant] = missing("random and other Fig 4 fits in likelihood.csv")
-            continue
+            return missing("random and other Fig 4 fits in likelihood.csv")
         failed = [f"K={k} random {inputs[RANDOM]:.2f} above {min(inputs, key=inputs.get)} "
                   f"{min(inputs.values()):.2f}" for k, inputs in by_k.items()
                   if inputs[RANDOM] > min(inputs.values()) + SAME_NATS]
         wins = len(by_k) - len(failed)
-        lines.append(f"{VARIANT_NAMES[variant]}: lowest at {wins} of {len(by_k)} K")
-        grades[variant] = Grade(share_verdict(wins, len(by_k)), f"lowest at {wins}/{len(by_k)} K", lost(failed))
+        return (Grade(share_verdict(wins, len(by_k)), f"lowest at {wins}/{len(by_k)} K", lost(failed)),
+                f"lowest at {wins} of {len(by_k)} K")
+
+    grades, lines = per_variant(grade)
     return Claim(section, title, rule, "; ".join(lines) + ".", grades, "lowest")
 
 
@@ -101,21 +102,22 @@ def mesh_reliable(data):
     section, title = "Fig 4", "Mesh fits are reliable at every K and from either start"
     rule = (f"{SHARE_RULE}; a comparison is one (mesh input, init, K), won when it ends within {CLOSE_NATS} nat of "
             "the best Fig 4 fit at that K")
-    grades, lines = {}, []
-    for variant in VARIANTS:
+
+    def grade(variant):
         table = cells(data.means, FIG3_MODEL, FIG4_INPUTS, variant)
         tops = {}
         for (init, k), cell in table.items():
             tops[k] = max(tops.get(k, -float("inf")), best(cell, FIG4_INPUTS))
         tried = [(name, init, k, cell[name]) for (init, k), cell in table.items() for name in cell if is_mesh(name)]
         if not tried:
-            grades[variant] = missing("Fig 4 mesh fits in likelihood.csv")
-            continue
+            return missing("Fig 4 mesh fits in likelihood.csv")
         failed = [f"{name} {init} K={k} {value - tops[k]:+.2f}" for name, init, k, value in tried
                   if value < tops[k] - CLOSE_NATS]
         wins = len(tried) - len(failed)
-        lines.append(f"{VARIANT_NAMES[variant]}: {wins} of {len(tried)} within {CLOSE_NATS} nat of the best")
-        grades[variant] = Grade(share_verdict(wins, len(tried)), f"{wins}/{len(tried)} near the best", lost(failed))
+        return (Grade(share_verdict(wins, len(tried)), f"{wins}/{len(tried)} near the best", lost(failed)),
+                f"{wins} of {len(tried)} within {CLOSE_NATS} nat of the best")
+
+    grades, lines = per_variant(grade)
     return Claim(section, title, rule, "; ".join(lines) + ".", grades, "all tests")
 
 
@@ -165,17 +167,18 @@ def exact_never_prefers_random(data):
     rule = (f"reproduced when no (exact mesh, K) has random − kmeans > {SAME_NATS} nat, partly when at most 10% do, "
             "else not reproduced")
     exact = tuple(name for name in FIG3_INPUTS + FIG4_INPUTS if name.endswith("-exact"))
-    grades, lines = {}, []
-    for variant in VARIANTS:
+
+    def grade(variant):
         gaps = init_gaps(data.means, FIG3_MODEL, exact, variant)
         if not gaps:
-            grades[variant] = missing("exact fits from both starts")
-            continue
+            return missing("exact fits from both starts")
         seen = [f"{name} K={k} {-gap:+.2f}" for (name, k), gap in gaps.items() if -gap > SAME_NATS]
         verdict = share_verdict(len(gaps) - len(seen), len(gaps), 1.0, 0.9)
-        lines.append(f"{VARIANT_NAMES[variant]}: random better in {len(seen)} of {len(gaps)}")
-        grades[variant] = Grade(verdict, f"{len(seen)}/{len(gaps)} prefer random",
-                                f"Random starts win: {'; '.join(seen[:3])}." if seen else "")
+        return (Grade(verdict, f"{len(seen)}/{len(gaps)} prefer random",
+                      f"Random starts win: {'; '.join(seen[:3])}." if seen else ""),
+                f"random better in {len(seen)} of {len(gaps)}")
+
+    grades, lines = per_variant(grade)
     return Claim(section, title, rule, "; ".join(lines) + ".", grades, "never")
 
 

@@ -2,8 +2,8 @@
 from dgmm.report import paper
 from dgmm.report.claims.rules import (FIG3_INPUTS, FIG3_MODEL, GAP_RULE, OFTEN_RULE, REPRODUCED, ROBUST_NATS, SAME_NATS,
                                       SHARE_RULE, VARIANTS, VARIANT_NAMES, Claim, Grade, best, cells, gap_verdict,
-                                      init_gaps, is_mesh, lost, mean, median, missing, often_verdict, pending, same,
-                                      sentence, share_verdict)
+                                      init_gaps, is_mesh, lost, mean, median, missing, often_verdict, pending,
+                                      per_variant, same, sentence, share_verdict)
 
 POINTS3 = tuple(name for name in FIG3_INPUTS if not is_mesh(name))
 MESH3 = tuple(name for name in FIG3_INPUTS if is_mesh(name))
@@ -15,20 +15,19 @@ def fig3_values(data):
     section, title = "Fig 3", "Exact triangles with k-means reach the paper's likelihoods (K = 25, 100, 400)"
     rule = f"{GAP_RULE}; applied to the largest |ours − paper| over K"
     published = ", ".join(f"K={k} {value:.2f}" for k, value in paper.FIG3_EXACT_KMEANS.items())
-    grades, lines = {}, []
-    for variant in VARIANTS:
+
+    def grade(variant):
         ours = {k: data.means.get((FIG3_MODEL, "res4-exact", variant, "kmeans", k)) for k in paper.FIG3_EXACT_KMEANS}
         gaps = {k: stats[0] - paper.FIG3_EXACT_KMEANS[k] for k, stats in ours.items() if stats is not None}
         if not gaps:
-            grades[variant] = missing("res4-exact k-means fits at K = 25, 100, 400 in likelihood.csv")
-            continue
+            return missing("res4-exact k-means fits at K = 25, 100, 400 in likelihood.csv")
         k = max(gaps, key=lambda key: abs(gaps[key]))
         verdict = gap_verdict(gaps[k])
-        lines.append(f"{VARIANT_NAMES[variant]}: " + ", ".join(f"K={key} {ours[key][0]:.2f} ({gap:+.2f})"
-                                                              for key, gap in sorted(gaps.items())))
-        grades[variant] = Grade(verdict, f"{ours[k][0]:.2f} at K={k} ({gaps[k]:+.2f})",
-                                "" if verdict == REPRODUCED else
-                                f"Ends {gaps[k]:+.2f} nat from the paper at K={k}.")
+        return (Grade(verdict, f"{ours[k][0]:.2f} at K={k} ({gaps[k]:+.2f})",
+                      "" if verdict == REPRODUCED else f"Ends {gaps[k]:+.2f} nat from the paper at K={k}."),
+                ", ".join(f"K={key} {ours[key][0]:.2f} ({gap:+.2f})" for key, gap in sorted(gaps.items())))
+
+    grades, lines = per_variant(grade)
     return Claim(section, title, rule, f"paper: {published}; ours (difference): {'; '.join(lines)}.", grades,
                  published)
 
@@ -41,13 +40,12 @@ def exact_best_approx_second(data):
             f"of the best input and the approximation at most {SAME_NATS} nat below exact and at least as good "
             f"(−{SAME_NATS}) as every point input. The strict reading also needs exact more than {SAME_NATS} nat "
             "above every point input (a margin the paper does not state); shown beside")
-    grades, lines = {}, []
-    for variant in VARIANTS:
+
+    def grade(variant):
         table = {key: cell for key, cell in cells(data.means, FIG3_MODEL, FIG3_INPUTS, variant).items()
                  if {"res4-exact", "res4-approx"} <= cell.keys() and cell.keys() & set(POINTS3)}
         if not table:
-            grades[variant] = missing("res4 exact, approx and point fits in likelihood.csv")
-            continue
+            return missing("res4 exact, approx and point fits in likelihood.csv")
         plain, strict, beaten, behind = 0, 0, {}, []
         for (init, k), cell in table.items():
             exact, approx, points = cell["res4-exact"], cell["res4-approx"], best(cell, POINTS3)
@@ -60,15 +58,16 @@ def exact_best_approx_second(data):
                 beaten.setdefault(top, []).append((cell[top] - exact, f"{init} K={k}"))
             if not second:
                 behind.append(f"{init} K={k} ({approx - max(exact, points):+.2f})")
-        verdict = share_verdict(plain, len(table))
-        lines.append(f"{VARIANT_NAMES[variant]}: plain reading {plain} of {len(table)} (init, K), strict reading "
-                     f"{strict} ({share_verdict(strict, len(table))})")
         causes = [f"{name} beats the exact mesh by a median {median([m for m, _ in cells_]):.2f} nat in "
                   f"{', '.join(where for _, where in cells_)}" for name, cells_ in beaten.items()]
         if behind:
             causes.append(f"the approximation falls behind in {', '.join(behind)}")
-        grades[variant] = Grade(verdict, f"plain {plain}/{len(table)}, strict {strict}/{len(table)}",
-                                sentence("; ".join(causes)))
+        return (Grade(share_verdict(plain, len(table)), f"plain {plain}/{len(table)}, strict {strict}/{len(table)}",
+                      sentence("; ".join(causes))),
+                f"plain reading {plain} of {len(table)} (init, K), strict reading {strict} "
+                f"({share_verdict(strict, len(table))})")
+
+    grades, lines = per_variant(grade)
     return Claim(section, title, rule, "; ".join(lines) + ".", grades, "every K (Fig 3)")
 
 
@@ -76,20 +75,19 @@ def robust_to_init(data, section, title, inputs, paper_words):
     """Mesh inputs end within ``ROBUST_NATS`` from k-means and random starts (share rule over (input, K))."""
     rule = f"{SHARE_RULE}; a comparison is one (mesh input, K), won when |kmeans − random| ≤ {ROBUST_NATS} nat"
     mesh = tuple(name for name in inputs if is_mesh(name))
-    grades, lines = {}, []
-    for variant in VARIANTS:
+
+    def grade(variant):
         gaps = init_gaps(data.means, FIG3_MODEL, mesh, variant)
         if not gaps:
-            grades[variant] = missing("mesh fits from both k-means and random starts")
-            continue
+            return missing("mesh fits from both k-means and random starts")
         wins = sum(abs(gap) <= ROBUST_NATS for gap in gaps.values())
         typical = sorted(gaps.values())[len(gaps) // 2]
         verdict = share_verdict(wins, len(gaps))
-        lines.append(f"{VARIANT_NAMES[variant]}: {wins} of {len(gaps)} within {ROBUST_NATS} nat, median "
-                     f"kmeans − random {typical:+.2f}")
-        grades[variant] = Grade(verdict, f"{wins}/{len(gaps)} within {ROBUST_NATS}",
-                                "" if verdict == REPRODUCED else
-                                f"K-means ends a median {typical:+.2f} nat above random starts.")
+        return (Grade(verdict, f"{wins}/{len(gaps)} within {ROBUST_NATS}", "" if verdict == REPRODUCED else
+                      f"K-means ends a median {typical:+.2f} nat above random starts."),
+                f"{wins} of {len(gaps)} within {ROBUST_NATS} nat, median kmeans − random {typical:+.2f}")
+
+    grades, lines = per_variant(grade)
     return Claim(section, title, rule, "; ".join(lines) + ".", grades, paper_words)
 
 

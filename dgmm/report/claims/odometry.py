@@ -6,7 +6,7 @@ fr3 folder is present) are stand-ins for it: the claims are graded on what they 
 from dgmm.odometry.frame_model import UNSIZED_METHODS
 from dgmm.report import paper
 from dgmm.report.claims.rules import (MACHINE, REPRODUCED, SHARE_RULE, VARIANTS, VARIANT_NAMES, Claim, Grade, lost,
-                                      mean, missing, pending, ratio_verdict, share_verdict)
+                                      mean, missing, pending, per_variant, ratio_verdict, share_verdict)
 
 PAPER_SEQUENCE = "rgbd_dataset_freiburg3_long_office_household"
 WHAT = "odometry.csv (config section `odometry`)"
@@ -46,23 +46,22 @@ def pixels_beat_points(data):
                  "improvement)")
     if data.odometry is None:
         return pending(section, title, rule, WHAT, published)
-    grades, lines = {}, []
-    for variant in VARIANTS:
+
+    def grade(variant):
         runs = {s: r for s, r in _runs(data.odometry, variant, "ate_rmse_m").items()
                 if {"gmm-pixels", "gmm-points"} <= r.keys()}
         if not runs:
-            grades[variant] = missing(f"gmm-pixels and gmm-points runs with {VARIANT_NAMES[variant]} in odometry.csv")
-            continue
+            return missing(f"gmm-pixels and gmm-points runs with {VARIANT_NAMES[variant]} in odometry.csv")
         failed = [f"{s} {r['gmm-pixels']:.3f} ≥ {r['gmm-points']:.3f} m" for s, r in runs.items()
                   if not r["gmm-pixels"] < r["gmm-points"]]
         wins = len(runs) - len(failed)
-        lines.append(f"{VARIANT_NAMES[variant]}: " + "; ".join(
-            f"{s} pixels {r['gmm-pixels']:.3f} m, points {r['gmm-points']:.3f} m "
-            f"({r['gmm-points'] / r['gmm-pixels'] - 1:+.1%})" + (f", icp {r['icp']:.3f} m" if "icp" in r else "")
-            for s, r in runs.items()))
         gains = ", ".join(f"{r['gmm-points'] / r['gmm-pixels'] - 1:+.0%}" for r in runs.values())
-        grades[variant] = Grade(share_verdict(wins, len(runs)), f"{wins}/{len(runs)} sequences ({gains})",
-                                lost(failed))
+        return (Grade(share_verdict(wins, len(runs)), f"{wins}/{len(runs)} sequences ({gains})", lost(failed)),
+                "; ".join(f"{s} pixels {r['gmm-pixels']:.3f} m, points {r['gmm-points']:.3f} m "
+                          f"({r['gmm-points'] / r['gmm-pixels'] - 1:+.1%})"
+                          + (f", icp {r['icp']:.3f} m" if "icp" in r else "") for s, r in runs.items()))
+
+    grades, lines = per_variant(grade)
     absent = _missing(data.odometry)
     return Claim(section, title, rule, f"ATE RMSE{_schedule(data.odometry)}, " + " — ".join(lines) + "."
                  + (f" Pending: {'; '.join(absent)}." if absent else ""), grades, published)
@@ -111,21 +110,21 @@ def _timing_ratio(data, section, title, rule, methods, column, reproduced, partl
     if data.odometry_seconds is None:
         return pending(section, title, rule, "odometry_seconds.csv (config section `odometry`)", paper_words,
                        machine_dependent=True)
-    grades, lines = {}, []
-    for variant in VARIANTS:
+
+    def grade(variant):
         runs = {s: r for s, r in _runs(data.odometry_seconds, variant, column).items() if set(methods) <= r.keys()}
         if not runs:
-            grades[variant] = missing(f"{' and '.join(methods)} timings with {VARIANT_NAMES[variant]} in "
-                                      "odometry_seconds.csv")
-            continue
+            return missing(f"{' and '.join(methods)} timings with {VARIANT_NAMES[variant]} in odometry_seconds.csv")
         ratios = {s: r[methods[0]] / r[methods[1]] for s, r in runs.items()}
         ratio = mean(list(ratios.values()))
         verdict = ratio_verdict(ratio, reproduced, partly)
-        lines.append(f"{VARIANT_NAMES[variant]}: " + ", ".join(f"{s} {r:.2f}" for s, r in ratios.items()))
-        grades[variant] = Grade(verdict, f"{methods[0]} / {methods[1]} {ratio:.2f}", "" if verdict == REPRODUCED else
-                                f"Mean {column.replace('_', ' ')}: " + "; ".join(
-                                    f"{s} {r[methods[0]] * 1000:.3g} vs {r[methods[1]] * 1000:.3g} ms"
-                                    for s, r in runs.items()) + ".")
+        return (Grade(verdict, f"{methods[0]} / {methods[1]} {ratio:.2f}", "" if verdict == REPRODUCED else
+                      f"Mean {column.replace('_', ' ')}: " + "; ".join(
+                          f"{s} {r[methods[0]] * 1000:.3g} vs {r[methods[1]] * 1000:.3g} ms"
+                          for s, r in runs.items()) + "."),
+                ", ".join(f"{s} {r:.2f}" for s, r in ratios.items()))
+
+    grades, lines = per_variant(grade)
     return Claim(section, title, rule, f"{methods[0]} / {methods[1]}{_schedule(data.odometry_seconds)}: "
                  + "; ".join(lines) + ".", grades,
                  paper_words, machine_dependent=True)

@@ -3,7 +3,7 @@ import numpy as np
 
 from dgmm.report import paper
 from dgmm.report.claims.rules import (MACHINE, REPRODUCED, SHARE_RULE, VARIANTS, VARIANT_NAMES, Claim, Grade, lost,
-                                      mean, median, missing, pending, ratio_verdict, same, share_verdict)
+                                      mean, median, missing, pending, per_variant, ratio_verdict, same, share_verdict)
 from dgmm.report.tables import FIG5_MESH
 
 FIG5_METHODS = ("mesh-kmeans", "mesh-random", "points-kmeans", "points-random", "icp", "cpd")
@@ -38,21 +38,20 @@ def mesh_registers_best(data):
     section, title = "Fig 5", "The mesh GMM registers better than the points GMM, ICP and CPD"
     rule = (f"{SHARE_RULE}; a comparison is one (error, other method): mesh-kmeans' mean error is lower than that of "
             "points-kmeans, points-random, ICP and CPD")
-    grades, lines = {}, []
-    for variant in VARIANTS:
+
+    def grade(variant):
         errors = _errors(data, variant)
         if not errors or "mesh-kmeans" not in errors:
-            grades[variant] = missing(WHAT)
-            continue
+            return missing(WHAT)
         means = _means(errors)
         total, failed = _mesh_below_others(means, lambda m, e: f"{m}'s mean {ERROR_NAMES[e]} error is lower "
                                                                f"({means[m][e]:.3g} vs {means['mesh-kmeans'][e]:.3g})")
         ours = means["mesh-kmeans"]
-        lines.append(f"{VARIANT_NAMES[variant]}: " + "; ".join(
-            f"{m} {v['rot']:.3g}° / {v['trans']:.3g}%" for m, v in means.items()))
-        grades[variant] = Grade(share_verdict(total - len(failed), total) if total else "pending",
-                                f"{total - len(failed)}/{total}; {ours['rot']:.2g}° / {ours['trans']:.2g}%",
-                                lost(failed))
+        return (Grade(share_verdict(total - len(failed), total) if total else "pending",
+                      f"{total - len(failed)}/{total}; {ours['rot']:.2g}° / {ours['trans']:.2g}%", lost(failed)),
+                "; ".join(f"{m} {v['rot']:.3g}° / {v['trans']:.3g}%" for m, v in means.items()))
+
+    grades, lines = per_variant(grade)
     published = "; ".join(f"{m} {r}° / {t}%" for m, (r, t) in paper.FIG5_MEANS.items())
     return Claim(section, title, rule, f"mean rotation / translation error: {' — '.join(lines)} (paper: "
                                        f"{published}).", grades, "{}° / {}%".format(*paper.FIG5_MEANS["mesh-kmeans"]))
@@ -69,19 +68,19 @@ def mesh_less_prone_to_outliers(data):
     section, title = "Fig 5", "The mesh GMM's mean is close to its median: fewer outliers than the other methods"
     rule = (f"{SHARE_RULE}; a comparison is one (error, other method): mesh-kmeans' (mean − median) / median is "
             "smaller")
-    grades, lines = {}, []
-    for variant in VARIANTS:
+
+    def grade(variant):
         errors = _errors(data, variant)
         if not errors or "mesh-kmeans" not in errors:
-            grades[variant] = missing(WHAT)
-            continue
+            return missing(WHAT)
         skews = {m: {e: _skew(v) for e, v in values.items()} for m, values in errors.items()}
         total, failed = _mesh_below_others(
             skews, lambda m, e: f"{m} {ERROR_NAMES[e]} {skews[m][e]:+.0%} vs {skews['mesh-kmeans'][e]:+.0%}")
-        lines.append(f"{VARIANT_NAMES[variant]}: " + "; ".join(
-            f"{m} {s['rot']:+.0%} / {s['trans']:+.0%}" for m, s in skews.items()))
-        grades[variant] = Grade(share_verdict(total - len(failed), total),
-                                "mesh {:+.0%} / {:+.0%}".format(*skews["mesh-kmeans"].values()), lost(failed))
+        return (Grade(share_verdict(total - len(failed), total),
+                      "mesh {:+.0%} / {:+.0%}".format(*skews["mesh-kmeans"].values()), lost(failed)),
+                "; ".join(f"{m} {s['rot']:+.0%} / {s['trans']:+.0%}" for m, s in skews.items()))
+
+    grades, lines = per_variant(grade)
     return Claim(section, title, rule, f"(mean − median) / median, rotation / translation: {' — '.join(lines)}.",
                  grades, "small difference")
 
@@ -154,19 +153,20 @@ def fig5_means_match(data):
     """Fig 5: the paper's mean errors per method (authors' notebook numbers)."""
     section, title = "Fig 5", "Our mean errors match the paper's per method (within a factor 2)"
     rule = f"{SHARE_RULE}; a comparison is one (method, error): ours / paper in [0.5, 2]"
-    grades, lines = {}, []
-    for variant in VARIANTS:
+
+    def grade(variant):
         errors = _errors(data, variant)
         if not errors:
-            grades[variant] = missing(WHAT)
-            continue
+            return missing(WHAT)
         means = _means(errors)
         ratios = {(m, e): means[m][e] / paper.FIG5_MEANS[m][i] for m in means if m in paper.FIG5_MEANS
                   for i, e in enumerate(ERROR_NAMES)}
         failed = [f"{m} {ERROR_NAMES[e]} ×{r:.2f}" for (m, e), r in ratios.items() if not 0.5 <= r <= 2.0]
-        lines.append(f"{VARIANT_NAMES[variant]}: " + ", ".join(f"{m} {e} ×{r:.2f}" for (m, e), r in ratios.items()))
-        grades[variant] = Grade(share_verdict(len(ratios) - len(failed), len(ratios)),
-                                f"{len(ratios) - len(failed)}/{len(ratios)} within ×2", lost(failed))
+        return (Grade(share_verdict(len(ratios) - len(failed), len(ratios)),
+                      f"{len(ratios) - len(failed)}/{len(ratios)} within ×2", lost(failed)),
+                ", ".join(f"{m} {e} ×{r:.2f}" for (m, e), r in ratios.items()))
+
+    grades, lines = per_variant(grade)
     return Claim(section, title, rule, "ours / paper: " + "; ".join(lines) + ".", grades, "Fig 5 means")
 
 

@@ -145,6 +145,30 @@ def missing(what):
     return Grade(PENDING, "–", f"Needs {what}.")
 
 
+def per_variant(grade):
+    """Grades and evidence lines of a claim graded on each EM's mixtures.
+
+    ``grade(variant)`` returns ``(Grade, evidence)``, or the :func:`missing` Grade alone when that EM's data are
+    missing; each evidence line is named by its EM.
+
+    Returns
+    -------
+    grades : dict
+        ``variant -> Grade`` for every variant of ``VARIANTS``.
+    lines : list of str
+        ``"<EM>: <evidence>"`` of every EM that had data, in ``VARIANTS`` order.
+    """
+    grades, lines = {}, []
+    for variant in VARIANTS:
+        result = grade(variant)
+        if isinstance(result, Grade):
+            grades[variant] = result
+        else:
+            grades[variant], evidence = result
+            lines.append(f"{VARIANT_NAMES[variant]}: {evidence}")
+    return grades, lines
+
+
 def pending(section, title, rule, what, paper="", machine_dependent=False):
     """A claim waiting for data: ``what`` names the missing table or run."""
     return Claim(section, title, rule, f"waiting for data: {what}.", same(missing(what)), paper, machine_dependent)

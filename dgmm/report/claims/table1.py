@@ -2,8 +2,8 @@
 import math
 
 from dgmm.report import paper
-from dgmm.report.claims.rules import (CLOSE_NATS, OFTEN_RULE, SHARE_RULE, VARIANTS, VARIANT_NAMES, Claim, Grade, lost,
-                                      missing, often_verdict, share_verdict)
+from dgmm.report.claims.rules import (CLOSE_NATS, OFTEN_RULE, SHARE_RULE, Claim, Grade, lost, missing, often_verdict,
+                                      per_variant, share_verdict)
 
 SIGNIFICANT_NATS = 0.5
 """A likelihood margin this large counts as significant (half a nat per evaluation point)."""
@@ -19,14 +19,7 @@ def _pairs(rows, measure):
 
 def _graded(data, section, title, rule, paper_words, grade, what):
     """A Table 1 claim graded per EM by ``grade(rows) -> (Grade, evidence line)`` (None when it has no data)."""
-    grades, lines = {}, []
-    for variant in VARIANTS:
-        result = grade(data.table1(variant))
-        if result is None:
-            grades[variant] = missing(what)
-            continue
-        grades[variant], line = result
-        lines.append(f"{VARIANT_NAMES[variant]}: {line}")
+    grades, lines = per_variant(lambda variant: grade(data.table1(variant)) or missing(what))
     return Claim(section, title, rule, "; ".join(lines) + ".", grades, paper_words)
 
 
