@@ -367,23 +367,34 @@ def write_synthetic_sequence(folder, triangles, n_frames=300, seed=0, intrinsics
     samples = np.rint(np.arange(int(n_frames)) * GROUNDTRUTH_RATE / FRAME_RATE).astype(int)
     groundtruth = path(samples[-1] + 1, seed=path_seed)
     rows, cols = -(-intrinsics.height // step), -(-intrinsics.width // step)
+
+    def image(sample, frame_seed):
+        exact, cosine = render_depth(triangles, groundtruth.rotations[sample], groundtruth.translations[sample],
+                                     intrinsics, step)
+        measured = kinect_depth(exact, cosine, np.random.default_rng(frame_seed)).reshape(rows, cols)
+        return np.repeat(np.repeat(measured, step, axis=0), step, axis=1)[:intrinsics.height, :intrinsics.width]
+
+    return _write_tum_folder(folder, ((groundtruth.timestamps[sample], image(sample, frame_seed))
+                                      for sample, frame_seed in zip(samples, frame_seeds)),
+                             f"synthetic sequence: dgmm.odometry.synthetic, seed {seed}, {len(triangles)} triangles",
+                             groundtruth, f"ground truth trajectory (synthetic, seed {seed})")
+
+
+def _write_tum_folder(folder, images, description, groundtruth, header):
+    """Write a TUM-format sequence to ``folder`` through a temporary folder beside it and a rename, so a failure
+    leaves no partial sequence: ``images`` yields ``(timestamp, depth image)``, ``description`` is depth.txt's
+    comment line, ``groundtruth`` and ``header`` those of groundtruth.txt. Returns the sequence read back."""
     folder.parent.mkdir(parents=True, exist_ok=True)
     staging = Path(tempfile.mkdtemp(prefix=f".{folder.name}.", dir=folder.parent))
     try:
         listing = []
-        for sample, frame_seed in zip(samples, frame_seeds):  # one rendered image per frame
-            exact, cosine = render_depth(triangles, groundtruth.rotations[sample], groundtruth.translations[sample],
-                                         intrinsics, step)
-            measured = kinect_depth(exact, cosine, np.random.default_rng(frame_seed)).reshape(rows, cols)
-            image = np.repeat(np.repeat(measured, step, axis=0), step, axis=1)[:intrinsics.height, :intrinsics.width]
-            name = f"depth/{groundtruth.timestamps[sample]:.6f}.png"
+        for stamp, image in images:
+            name = f"depth/{stamp:.6f}.png"
             write_depth(staging / name, image)
-            listing.append(f"{groundtruth.timestamps[sample]:.6f} {name}\n")
-        (staging / "depth.txt").write_text(
-            f"# depth maps\n# synthetic sequence: dgmm.odometry.synthetic, seed {seed}, {len(triangles)} triangles\n"
-            "# timestamp filename\n" + "".join(listing))
-        write_trajectory(staging / "groundtruth.txt", groundtruth,
-                         header=f"ground truth trajectory (synthetic, seed {seed})")
+            listing.append(f"{stamp:.6f} {name}\n")
+        (staging / "depth.txt").write_text(f"# depth maps\n# {description}\n# timestamp filename\n"
+                                           + "".join(listing))
+        write_trajectory(staging / "groundtruth.txt", groundtruth, header=header)
         os.rename(staging, folder)
     except BaseException:
         shutil.rmtree(staging)
@@ -486,23 +497,10 @@ def write_spun_sequence(folder, sequence, frames, peak_deg_s=90.0, seed=0, intri
         raise InputError("write_spun_sequence: every frame needs a ground-truth pose")
     timestamps = sequence.depth_timestamps[frames]
     turns = spin(timestamps, peak_deg_s, seed)
-    folder.parent.mkdir(parents=True, exist_ok=True)
-    staging = Path(tempfile.mkdtemp(prefix=f".{folder.name}.", dir=folder.parent))
-    try:
-        listing = []
-        for frame, stamp, turn in zip(frames, timestamps, turns):
-            name = f"depth/{stamp:.6f}.png"
-            write_depth(staging / name, rotated_depth(sequence.depth(frame), turn, intrinsics))
-            listing.append(f"{stamp:.6f} {name}\n")
-        (staging / "depth.txt").write_text(f"# depth maps\n# {sequence.folder.name} spun at {peak_deg_s} deg/s "
-                                           f"(dgmm.odometry.synthetic, seed {seed})\n# timestamp filename\n"
-                                           + "".join(listing))
-        truth = poses.subset(rows)
-        write_trajectory(staging / "groundtruth.txt", Trajectory(timestamps, truth.rotations @ turns,
-                                                                 truth.translations),
-                         header=f"ground truth of {sequence.folder.name}, spun (seed {seed})")
-        os.rename(staging, folder)
-    except BaseException:
-        shutil.rmtree(staging)
-        raise
-    return read_sequence(folder)
+    truth = poses.subset(rows)
+    return _write_tum_folder(folder, ((stamp, rotated_depth(sequence.depth(frame), turn, intrinsics))
+                                      for frame, stamp, turn in zip(frames, timestamps, turns)),
+                             f"{sequence.folder.name} spun at {peak_deg_s} deg/s "
+                             f"(dgmm.odometry.synthetic, seed {seed})",
+                             Trajectory(timestamps, truth.rotations @ turns, truth.translations),
+                             f"ground truth of {sequence.folder.name}, spun (seed {seed})")
