@@ -146,17 +146,16 @@ def _fit_mixture(prims, rng, previous, options):
 
 
 def _view_mixture(prims, depth, intrinsics, rng, previous, options):
-    """The frame's mixture; with ``overlap_refits`` it also keeps its primitives (``primitives_``) and a seed for
-    its refits on common views (``refit_seed_``, drawn from the frame's ``rng`` after the fit); with ``cut_unseen``
-    it is a :class:`~dgmm.odometry.measured_cut.MeasuredFrame` (the mixture, its primitives, its measured pixels)."""
+    """The frame's mixture; a :class:`~dgmm.odometry.measured_cut.MeasuredFrame` (the mixture, its primitives, its
+    measured pixels) when the schedule's registration cuts or refits it, with ``overlap_refits`` a seed for the
+    refits drawn from the frame's ``rng`` after the fit."""
     schedule = options["schedule"]
     mixture = _fit_mixture(prims, rng, previous, options)
-    if schedule.overlap_refits:
-        mixture.primitives_, mixture.refit_seed_ = prims, int(rng.integers(np.iinfo(np.int64).max))
-    if schedule.cut_unseen:
-        return MeasuredFrame(mixture, prims, np.asarray(depth)[::PIXEL_STEP, ::PIXEL_STEP] > 0, intrinsics,
-                             PIXEL_STEP, options["variant"])
-    return mixture
+    if not (schedule.overlap_refits or schedule.cut_unseen):
+        return mixture
+    refit_seed = int(rng.integers(np.iinfo(np.int64).max)) if schedule.overlap_refits else None
+    return MeasuredFrame(mixture, prims, np.asarray(depth)[::PIXEL_STEP, ::PIXEL_STEP] > 0, intrinsics, PIXEL_STEP,
+                         options["variant"], refit_seed)
 
 
 def _prepare_pixels(depth, intrinsics, rng, previous, options):
@@ -180,9 +179,9 @@ def _register_d2d(fixed, moving, options):
         views = fixed, moving
 
         def fit(prims, frame):  # every refit of a frame from its own seed: the same bytes run to run
-            return _fit_mixture(prims, np.random.default_rng(views[frame].refit_seed_), None, options)
+            return _fit_mixture(prims, np.random.default_rng(views[frame].refit_seed), None, options)
 
-        registration = register_d2d_common_view(*((view, view.primitives_) for view in views), fit,
+        registration = register_d2d_common_view(*((view, view.primitives) for view in views), fit,
                                                 options["intrinsics"], schedule.overlap_refits,
                                                 max(schedule.overlap_rounds, 1), schedule.overlap_scales,
                                                 schedule.solver)

@@ -41,6 +41,8 @@ class MeasuredFrame:
     step : int
     variant : str
         The EM variant the mixture was fitted with (its M-step weights).
+    refit_seed : int or None
+        Seeds every refit of the frame on a common view (the ``common-view`` schedule), so that runs repeat.
     """
 
     mixture: object
@@ -49,6 +51,7 @@ class MeasuredFrame:
     intrinsics: object
     step: int
     variant: str
+    refit_seed: int | None = None
 
     def __getattr__(self, name):  # the fitted attributes of the mixture
         if name.endswith("_") and not name.startswith("_"):
