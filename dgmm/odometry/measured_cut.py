@@ -73,12 +73,8 @@ def seen_by(points, frame):
     seen : ndarray of bool, shape (n,)
         In front of the camera and nearest to a grid pixel (``u, v`` multiples of ``step``) with a measurement.
     """
-    camera, step = frame.intrinsics, frame.step
-    depth = points[:, 2]
-    front = depth > 0
-    safe = np.where(front, depth, 1.0)
-    col = np.rint((camera.fx * points[:, 0] / safe + camera.cx) / step)
-    row = np.rint((camera.fy * points[:, 1] / safe + camera.cy) / step)
+    u, v, front = frame.intrinsics.project(points)
+    col, row = np.rint(u / frame.step), np.rint(v / frame.step)
     rows, cols = frame.measured.shape
     inside = front & (col >= 0) & (col < cols) & (row >= 0) & (row < rows)
     seen = np.zeros(len(points), dtype=bool)

@@ -38,12 +38,7 @@ def seen_by(means, rotation, translation, intrinsics):
     seen : ndarray of bool, shape (n,)
         Projection ``u`` in ``[-0.5, width - 0.5)`` and ``v`` in ``[-0.5, height - 0.5)``, depth positive.
     """
-    points = means @ rotation.T + translation
-    depth = points[:, 2]
-    front = depth > 0
-    safe = np.where(front, depth, 1.0)
-    u = intrinsics.fx * points[:, 0] / safe + intrinsics.cx
-    v = intrinsics.fy * points[:, 1] / safe + intrinsics.cy
+    u, v, front = intrinsics.project(means @ rotation.T + translation)
     return front & (u >= -0.5) & (u < intrinsics.width - 0.5) & (v >= -0.5) & (v < intrinsics.height - 0.5)
 
 

@@ -52,6 +52,24 @@ class Intrinsics:
         return np.stack([(u.ravel() - self.cx) / self.fx, (v.ravel() - self.cy) / self.fy,
                          np.ones(u.size)], axis=1)
 
+    def project(self, points):
+        """Pixel coordinates of camera-frame points, and which are in front of the camera.
+
+        Parameters
+        ----------
+        points : ndarray of shape (n, 3)
+
+        Returns
+        -------
+        u, v : ndarrays of shape (n,)
+            ``fx x / z + cx`` and ``fy y / z + cy`` (for points not in front, as if ``z`` were 1).
+        front : ndarray of bool, shape (n,)
+            ``z > 0``.
+        """
+        front = points[:, 2] > 0
+        depth = np.where(front, points[:, 2], 1.0)
+        return self.fx * points[:, 0] / depth + self.cx, self.fy * points[:, 1] / depth + self.cy, front
+
 
 CAMERAS = {
     "fr1": Intrinsics(fx=517.3, fy=516.5, cx=318.6, cy=255.3, width=640, height=480),
