@@ -127,11 +127,16 @@ def cut(frame, unseen):
     resp = mixture.predict_proba(Primitives(points, prim_covariances, prims.weights[unseen]))
     resp *= mstep_weights[unseen, None]
     lost = resp.sum(axis=0)
-    offsets = points[:, None, :] - means[None, :, :]  # (n_unseen, K, 3)
-    weighted = resp[:, :, None] * offsets
-    first = weighted.sum(axis=0)
-    second = np.einsum("pka,pkb->kab", weighted, offsets)
-    second += (resp.T @ prim_covariances.reshape(-1, 9)).reshape(-1, 3, 3)
+    # The sums about each component's mean from sums about one centre c (matrix products over the primitives):
+    # Σ r (x - μ) = s - m d and Σ r (x - μ)(x - μ)ᵀ = S - s dᵀ - d sᵀ + m d dᵀ, with y = x - c, d = μ - c.
+    centre = points.mean(axis=0)
+    offsets = points - centre
+    moments = resp.T @ np.concatenate([offsets, (offsets[:, :, None] * offsets[:, None, :]).reshape(-1, 9)
+                                       + prim_covariances.reshape(-1, 9)], axis=1)
+    about, d = moments[:, :3], means - centre
+    first = about - lost[:, None] * d
+    second = (moments[:, 3:].reshape(-1, 3, 3) - about[:, :, None] * d[:, None, :] - d[:, :, None] * about[:, None, :]
+              + lost[:, None, None] * d[:, :, None] * d[:, None, :])
     left = mass - lost
     kept = left > _MIN_MASS * mass
     shift = -first[kept] / left[kept, None]
