@@ -4,10 +4,10 @@ On one BLAS thread (as the workflow's jobs run), over the first N depth frames o
 mirror by default, all 798 frames): each method and EM variant under each schedule, a name of
 ``dgmm.odometry.frame_model.SCHEDULES`` or ``SEED_SAMPLE:LLOYD_ITER:EM_ITER:SOLVER`` (a ``Schedule``; SEED_SAMPLE
 ``all`` for scikit-learn's k-means on every primitive), optionally followed by ``:OVERLAP_ROUNDS``,
-``:SCALE,SCALE,...`` and ``:REFITS`` (the overlap fields), and by ``+cut`` (``cut_unseen``). Prints one markdown
-row per run: ATE RMSE, the one-second RPE, the slope of the estimated on the true translation over 10 frames (below
-1: the motion is under-measured), CPU seconds per frame (fit + D2D; the machine may be shared, so CPU time, not wall
-time) and the worst frame-to-frame error against the ground truth.
+``:SCALE,SCALE,...`` and ``:REFITS`` (the overlap fields), and by ``+cutN`` (``cut_rounds``; ``+cut`` is one).
+Prints one markdown row per run: ATE RMSE, the one-second RPE, the slope of the estimated on the true translation
+over 10 frames (below 1: the motion is under-measured), CPU seconds per frame (fit + D2D; the machine may be shared,
+so CPU time, not wall time) and the worst frame-to-frame error against the ground truth.
 
 Usage: ``python benchmarks/odometry_schedules.py [SEQUENCE_DIR] [--frames N] [--schedules fast reference ...]
 [--variants textbook authors] [--methods gmm-pixels] [--seed S]``.
@@ -30,10 +30,11 @@ FR1_XYZ = Path(__file__).resolve().parents[2] / "shared" / "data" / "tum" / "rgb
 
 def parse_schedule(text):
     """A SCHEDULES name, or ``SEED_SAMPLE:LLOYD_ITER:EM_ITER:SOLVER[:OVERLAP_ROUNDS[:SCALE,...[:REFITS]]]``; the
-    suffix ``+cut`` sets ``cut_unseen``."""
-    text, cut = (text[:-len("+cut")], True) if text.endswith("+cut") else (text, False)
+    suffix ``+cutN`` sets ``cut_rounds`` to N (``+cut``: 1)."""
+    text, _, rounds = text.partition("+cut")
+    cut = int(rounds or 1) if _ else 0
     if text in SCHEDULES:
-        return dataclasses.replace(SCHEDULES[text], cut_unseen=cut or SCHEDULES[text].cut_unseen)
+        return dataclasses.replace(SCHEDULES[text], cut_rounds=cut or SCHEDULES[text].cut_rounds)
     sample, lloyd_iter, em_iter, solver, *overlap = text.split(":")
     rounds = int(overlap[0]) if overlap else 0
     scales = tuple(float(scale) for scale in overlap[1].split(",")) if len(overlap) > 1 else (0.0,)

@@ -45,11 +45,14 @@ class WidenedMixture:
         self.precisions_cholesky_ = np.linalg.inv(lower).transpose(0, 2, 1)
 
 
-def _check_scales(scales):
-    """The schedule as a tuple of floats: non-increasing, non-negative, ending at 0; else an InputError."""
+def _check_scales(scales, end_at_zero=True):
+    """The schedule as a tuple of floats: non-increasing, non-negative, ending at 0 (unless not ``end_at_zero``);
+    else an InputError."""
     values = tuple(float(scale) for scale in scales)
-    if not values or values[-1] != 0.0 or any(b > a for a, b in zip(values, values[1:])) or min(values) < 0:
-        raise InputError(f"scales must be non-negative, non-increasing and end with 0, got {list(scales)}")
+    if (not values or (end_at_zero and values[-1] != 0.0) or any(b > a for a, b in zip(values, values[1:]))
+            or min(values) < 0):
+        ending = " and end with 0" if end_at_zero else ""
+        raise InputError(f"scales must be non-negative, non-increasing{ending}, got {list(scales)}")
     return values
 
 

@@ -238,6 +238,27 @@ def _e_step_block(table, scale, coefficients, rows, out):
     return resp, _normalise_in_place(resp)
 
 
+def responsibilities(prims, weights, means, precisions_cholesky, scale=1.0):
+    """Responsibilities of ``prims`` under a mixture, shape (n_prims, n_components), as EM's E-step computes them.
+
+    Parameters
+    ----------
+    prims : Primitives
+    weights, means, precisions_cholesky : ndarrays of shape (K,), (K, 3), (K, 3, 3)
+        In data units (e.g. a fitted mixture's ``e_step_params_``).
+    scale : float or ndarray of shape (n_prims,), default=1.0
+        The E-step's factor on each primitive's expected log-density (a variant's, :mod:`dgmm.variants`; 1 is
+        the textbook E-step).
+    """
+    centre = weights @ means
+    covariances = np.linalg.inv(precisions_cholesky @ np.swapaxes(precisions_cholesky, 1, 2))
+    unit, _ = _unit(means - centre, covariances, weights)
+    features = _moment_features(prims.means, prims.covariances, centre, scale, unit)
+    resp = _log_rho(features, (weights, (means - centre) / unit, precisions_cholesky * unit), unit=unit)
+    _normalise_in_place(resp)
+    return resp
+
+
 def _m_step_sums(resp, table, mstep_weights, rows):
     """``respᵀ ·`` (moment table columns 0–9 × M-step weight) over the primitives ``rows``: every component's
     mass, first and second moment sums (eqs. 12, 13), shape (n_components, 10)."""
@@ -375,6 +396,10 @@ class GaussianMixture(BaseEstimator):
     history_ : list of float
         The bound after each iteration (but the last when ``tol`` is None); ``history_[-1] == lower_bound_``
         when it is not empty.
+    e_step_params_ : tuple of ndarray
+        ``(weights, means, precisions_cholesky)`` whose E-step gave the responsibilities of the last M-step (the
+        parameters before it): with :func:`responsibilities` they take a primitive's share out of that M-step
+        exactly, as :mod:`dgmm.odometry.measured_cut` does.
     """
 
     def __init__(self, n_components=1, *, init="kmeans", max_iter=25, tol=1e-12, reg_covar=1e-6,
@@ -516,6 +541,7 @@ class GaussianMixture(BaseEstimator):
             for iteration in range(1, self.max_iter + 1):
                 previous = bound
                 scored = self.tol is not None or iteration < self.max_iter
+                e_step_params = params[:3]  # whose E-step gave ``sums``
                 try:
                     params = _m_step(sums, reg_covar)
                     if scored:
@@ -533,6 +559,8 @@ class GaussianMixture(BaseEstimator):
                     self.converged_ = True
                     break
         self.lower_bound_ = float(bound)
+        weights, means, prec_chol = e_step_params
+        self.e_step_params_ = (weights, means * unit + centre, prec_chol / unit)
         return self
 
     # -- evaluation -------------------------------------------------------------------------------------

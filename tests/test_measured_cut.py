@@ -1,14 +1,20 @@
-"""The odometry schedule's ``cut_unseen`` (dgmm.odometry.measured_cut): which primitives the other frame measures,
+"""The odometry schedule's ``cut_rounds`` (dgmm.odometry.measured_cut): which primitives the other frame measures,
 and each mixture cut to them.
 
 References are independent of the code under test: pixel indices shifted by hand for a plane seen at a known
 depth, and the M-step over the seen primitives summed directly from every primitive's responsibilities.
 """
+import dataclasses
+
 import numpy as np
 import pytest
+from scipy.special import logsumexp
+from scipy.stats import multivariate_normal
 
+from dgmm.errors import InputError
 from dgmm.mixture import GaussianMixture
 from dgmm.odometry import CAMERAS, pixel_primitives
+from dgmm.odometry.frame_model import SCHEDULES
 from dgmm.odometry.measured_cut import MeasuredFrame, cut, seen_by, unseen_primitives
 from dgmm.odometry.pixels import PIXEL_STEP
 
@@ -115,3 +121,54 @@ def test_cut_drops_a_component_with_no_seen_primitive():
     weights, _, _ = cut(frame, frame.primitives.means[:, 2] > 2.0)
     np.testing.assert_allclose(weights[near], 1.0)
     assert weights[1 - near] == 0.0
+
+
+@pytest.mark.parametrize("variant", ["textbook", "authors"])
+def test_cut_of_a_two_iteration_fit_is_its_last_m_step_over_the_seen_primitives(variant):
+    """The odometry's mixtures run two EM iterations, far from a fixed point: the cut equals the second M-step
+    summed directly over the seen primitives, with responsibilities computed here by scipy under the parameters
+    after one iteration (for the authors' EM the Mahalanobis-plus-trace term times ``alpha / min(alpha)`` and an
+    unweighted M-step; the textbook M-step weighted by size)."""
+    rng = np.random.default_rng(2)
+    v, u = np.mgrid[0:ROS.height, 0:ROS.width]
+    image = 1.0 + 0.6 * (u / ROS.width) ** 2 + 0.5 * np.cos(v / 70.0) + 0.002 * rng.standard_normal(u.shape)
+    prims = frame_of(image).primitives
+    common = dict(tol=None, reg_covar=1e-6, random_state=0, variant=variant)
+    before = GaussianMixture(5, max_iter=1, **common).fit(prims)
+    mixture = GaussianMixture(5, max_iter=2, **common).fit(prims)
+    unseen = prims.means[:, 0] / prims.means[:, 2] < -0.1
+    weights, means, covariances = cut(frame_of(image, mixture, variant), unseen)
+
+    def m_step_over_seen(model):
+        sizes = prims.weights
+        scale = sizes / sizes.min() if variant == "authors" else np.ones(len(sizes))
+        gaussians = [multivariate_normal(mean, cov) for mean, cov in zip(model.means_, model.covariances_)]
+        peaks = np.array([gaussian.logpdf(gaussian.mean) for gaussian in gaussians])  # log-normalisers
+        log_rho = np.log(model.weights_) + peaks + scale[:, None] * np.column_stack([
+            gaussian.logpdf(prims.means) - peak - 0.5 * np.einsum("ab,pba->p", np.linalg.inv(gaussian.cov),
+                                                                  prims.covariances)
+            for gaussian, peak in zip(gaussians, peaks)])
+        resp = np.exp(log_rho - logsumexp(log_rho, axis=1, keepdims=True))[~unseen]
+        resp *= (np.ones(len(sizes)) if variant == "authors" else sizes)[~unseen, None]
+        mass = resp.sum(axis=0)
+        x, c = prims.means[~unseen], prims.covariances[~unseen]
+        direct_means = resp.T @ x / mass[:, None]
+        direct_covariances = np.stack([
+            (resp[:, k, None] * (x - direct_means[k])).T @ (x - direct_means[k]) + np.einsum("p,pab->ab", resp[:, k], c)
+            for k in range(len(mass))]) / mass[:, None, None] + 1e-6 * np.eye(3)
+        return mass / mass.sum(), direct_means, direct_covariances
+
+    expected = m_step_over_seen(before)
+    assert 0.2 < unseen.mean() < 0.5
+    np.testing.assert_allclose(weights, expected[0], rtol=1e-8)
+    np.testing.assert_allclose(means, expected[1], rtol=0, atol=1e-9)
+    np.testing.assert_allclose(covariances, expected[2], rtol=0, atol=1e-10)
+    # The case has power: responsibilities under the fitted parameters give another mixture.
+    assert np.abs(m_step_over_seen(mixture)[1] - expected[1]).max() > 1e-4
+
+
+def test_a_schedule_that_ends_widened_needs_cut_rounds():
+    """The overlap rounds may end widened only when cut rounds register the mixtures themselves after them."""
+    assert SCHEDULES["overlap"].overlap_scales[-1] > 0 and SCHEDULES["overlap"].cut_rounds > 0
+    with pytest.raises(InputError, match="overlap_scales"):
+        dataclasses.replace(SCHEDULES["overlap"], cut_rounds=0)

@@ -21,6 +21,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from dgmm.errors import InputError
 from dgmm.mixture import GaussianMixture
 from dgmm.odometry.em_start import lloyd_start
 from dgmm.odometry.measured_cut import MeasuredFrame, register_measured
@@ -84,15 +85,17 @@ class Schedule:
         Rounds of D2D, at each of ``overlap_scales``, on the components the other frame's camera sees
         (:func:`dgmm.odometry.overlap.register_d2d_overlap`); 0 registers the whole mixtures once.
     overlap_scales : tuple of float, default=(0.0,)
-        Coarse-to-fine widening of those rounds, in RMS radii of the moving mixture, ending with 0.
+        Coarse-to-fine widening of those rounds, in RMS radii of the moving mixture, non-increasing; ending with 0
+        unless cut rounds follow (they register the mixtures themselves).
     overlap_refits : int, default=0
         After the rounds, refit both frames on the primitives the other camera sees and register them from the
         pose so far, this many times (:func:`dgmm.odometry.overlap.register_d2d_common_view`; two more fits per
         frame each).
-    cut_unseen : bool, default=False
-        Then cut both mixtures to the primitives the other frame measures at that pose and register them from it
-        (:func:`dgmm.odometry.measured_cut.register_measured`): what only one frame measured pulls D2D toward the
-        identity.
+    cut_rounds : int, default=0
+        Then, this many times, cut both mixtures to the primitives the other frame measures at the pose so far and
+        register them from it (:func:`dgmm.odometry.measured_cut.register_measured`): what only one frame measured
+        pulls D2D toward the identity, and a cut at a pose some centimetres off keeps part of that pull, so each
+        round about halves what is left of it.
     """
 
     seed_sample: int | None
@@ -102,13 +105,17 @@ class Schedule:
     overlap_rounds: int = 0
     overlap_scales: tuple = (0.0,)
     overlap_refits: int = 0
-    cut_unseen: bool = False
+    cut_rounds: int = 0
+
+    def __post_init__(self):
+        if self.overlap_scales[-1] != 0.0 and not self.cut_rounds:
+            raise InputError(f"overlap_scales {self.overlap_scales} end widened: they need cut rounds after them")
 
 
 _FAST = Schedule(seed_sample=1024, lloyd_iter=3, em_iter=2, solver="gauss-newton")
 
 SCHEDULES = {
-    "overlap": replace(_FAST, overlap_rounds=1, overlap_scales=(0.0625, 0.0), cut_unseen=True),
+    "overlap": replace(_FAST, overlap_rounds=1, overlap_scales=(0.0625,), cut_rounds=3),
     "fast": _FAST,
     "common-view": replace(_FAST, overlap_rounds=2, overlap_scales=(0.25, 0.125, 0.0625, 0.03125, 0.0),
                            overlap_refits=2),
@@ -118,9 +125,9 @@ SCHEDULES = {
 benchmarks/odometry_rotation_room.py; the docs' Visual odometry section). ``"fast"``: k-means++ seeds from 1,024
 primitives, 3 Lloyd iterations and 2 EM iterations on every primitive, Gauss-Newton D2D of the whole mixtures.
 ``"overlap"``, the sweep's default: the same mixtures, registered first on the components each camera sees of the
-other, widened by 0.0625 RMS radii then not, then cut to the primitives each frame measures of the other
-(``cut_unseen``) and registered again: what only one frame measured no longer pulls the estimate toward the
-identity, and the widened stage keeps fast turns in the right basin. ``"common-view"``: two overlap rounds at each
+other, widened by 0.0625 RMS radii (it keeps fast turns in the right basin), then three times cut to the primitives
+each frame measures of the other at the pose so far and registered again (``cut_rounds``): what only one frame
+measured no longer pulls the estimate toward the identity. ``"common-view"``: two overlap rounds at each
 of five widenings, then both frames refitted twice on the primitives the other camera sees (robust where views
 change fastest, at about five times the CPU). ``"reference"``: scikit-learn's k-means on every primitive, 25 EM
 iterations (the fitting experiments' count; the paper does not state the odometry's) and the paper's BFGS."""
@@ -151,7 +158,7 @@ def _view_mixture(prims, depth, intrinsics, rng, previous, options):
     refits drawn from the frame's ``rng`` after the fit."""
     schedule = options["schedule"]
     mixture = _fit_mixture(prims, rng, previous, options)
-    if not (schedule.overlap_refits or schedule.cut_unseen):
+    if not (schedule.overlap_refits or schedule.cut_rounds):
         return mixture
     refit_seed = int(rng.integers(np.iinfo(np.int64).max)) if schedule.overlap_refits else None
     return MeasuredFrame(mixture, prims, np.asarray(depth)[::PIXEL_STEP, ::PIXEL_STEP] > 0, intrinsics, PIXEL_STEP,
@@ -190,8 +197,8 @@ def _register_d2d(fixed, moving, options):
                                             schedule.overlap_scales, schedule.solver)
     else:
         registration = register_d2d(fixed, moving, solver=schedule.solver)
-    if schedule.cut_unseen:
-        return register_measured(fixed, moving, registration, schedule.solver)
+    for _ in range(schedule.cut_rounds):
+        registration = register_measured(fixed, moving, registration, schedule.solver)
     return registration
 
 

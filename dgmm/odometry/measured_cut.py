@@ -15,6 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from dgmm.mixture import responsibilities
 from dgmm.primitives import Primitives
 from dgmm.registration import register_d2d
 from dgmm.variants import VARIANTS
@@ -99,12 +100,12 @@ def cut(frame, unseen):
 
     Component ``k`` of the fitted mixture holds mass ``M_k = π_k Σ_p a_p`` (``a_p`` the variant's M-step weights)
     with mean ``μ_k`` and covariance ``Σ_k``; the unseen primitives contribute ``m_k = Σ r_pk a_p``,
-    ``s_k = Σ r_pk a_p (x_p - μ_k)`` and ``T_k = Σ r_pk a_p ((x_p - μ_k)(x_p - μ_k)ᵀ + C_p)`` with their
-    responsibilities ``r_pk`` under the fitted mixture (``predict_proba``). What is left: mass ``M_k - m_k``, mean
-    ``μ_k - s_k / (M_k - m_k)`` and covariance ``(M_k Σ_k - T_k) / (M_k - m_k) - d dᵀ`` with ``d`` that shift (the
-    M-step over the seen primitives, exact when the mixture is a fixed point of textbook EM; ``reg_covar`` is taken
-    off the fitted covariances and added back). A component left with less than
-    ``_MIN_MASS`` of its mass gets weight 0; if every component does, the mixture is returned uncut.
+    ``s_k = Σ r_pk a_p (x_p - μ_k)`` and ``T_k = Σ r_pk a_p ((x_p - μ_k)(x_p - μ_k)ᵀ + C_p)`` with the
+    responsibilities ``r_pk`` of the fit's last M-step (the variant's E-step under the parameters before it,
+    ``e_step_params_``). What is left: mass ``M_k - m_k``, mean ``μ_k - s_k / (M_k - m_k)`` and covariance
+    ``(M_k Σ_k - T_k) / (M_k - m_k) - d dᵀ`` with ``d`` that shift: exactly the last M-step over the seen primitives,
+    converged or not (``reg_covar`` is taken off the fitted covariances and added back). A component left with less
+    than ``_MIN_MASS`` of its mass gets weight 0; if every component does, the mixture is returned uncut.
 
     Parameters
     ----------
@@ -119,12 +120,13 @@ def cut(frame, unseen):
     weights, means = mixture.weights_, mixture.means_
     regulariser = mixture.reg_covar * np.eye(3)  # the M-step adds it to every covariance: the moments are without
     covariances = mixture.covariances_ - regulariser
-    _, mstep_weights = VARIANTS[frame.variant](prims.weights)
+    scale, mstep_weights = VARIANTS[frame.variant](prims.weights)
     mass = weights * mstep_weights.sum()
     if not unseen.any():
         return weights, means, mixture.covariances_
     points, prim_covariances = prims.means[unseen], prims.covariances[unseen]
-    resp = mixture.predict_proba(Primitives(points, prim_covariances, prims.weights[unseen]))
+    resp = responsibilities(Primitives(points, prim_covariances, prims.weights[unseen]), *mixture.e_step_params_,
+                            scale=scale[unseen])
     resp *= mstep_weights[unseen, None]
     lost = resp.sum(axis=0)
     # The sums about each component's mean from sums about one centre c (matrix products over the primitives):

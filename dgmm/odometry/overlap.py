@@ -61,8 +61,8 @@ def register_d2d_overlap(fixed, moving, intrinsics, rounds=3, scales=(0.0,), sol
     them from that pose; the first round starts from the identity, where each camera sees (nearly) all of its own
     mixture. With ``scales`` the rounds run at each scale in turn on the kept components widened by
     ``(scale * radius)^2 I`` (``radius`` the moving mixture's weighted RMS radius about its weighted centroid), a
-    coarse-to-fine schedule that ends on the mixtures themselves. A round that would leave either mixture without a
-    component ends the registration.
+    coarse-to-fine schedule that ends on the mixtures themselves (or widened, for what registers them next). A
+    round that would leave either mixture without a component ends the registration.
 
     Parameters
     ----------
@@ -73,7 +73,8 @@ def register_d2d_overlap(fixed, moving, intrinsics, rounds=3, scales=(0.0,), sol
     rounds : int
         Rounds at each scale (at least 1).
     scales : sequence of float, default=(0.0,)
-        Widening in RMS radii of the moving mixture, non-increasing, ending with 0.
+        Widening in RMS radii of the moving mixture, non-increasing; ending with 0 registers the mixtures
+        themselves last, ending above 0 leaves that to what follows (the odometry's cut rounds).
     solver : {"bfgs", "gauss-newton"}
 
     Returns
@@ -84,7 +85,7 @@ def register_d2d_overlap(fixed, moving, intrinsics, rounds=3, scales=(0.0,), sol
     """
     if int(rounds) < 1:
         raise InputError(f"rounds must be at least 1, got {rounds!r}")
-    scales = _check_scales(scales)
+    scales = _check_scales(scales, end_at_zero=False)
     weights, means = np.asarray(moving.weights_), np.asarray(moving.means_)
     centroid = weights @ means / weights.sum()
     radius = float(np.sqrt(weights @ np.sum((means - centroid) ** 2, axis=1) / weights.sum()))
