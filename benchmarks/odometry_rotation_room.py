@@ -10,14 +10,16 @@ N rounds at each of ``--overlap-scales``), ``c2f`` (both mixtures'
 covariances widened by ``s² I`` over ``--scales``, each stage's Gauss-Newton from the last pose), ``truth``
 (from the true motion), ``fov-truth`` (an oracle: both frames refitted on their common view under the true
 motion), ``refit-STRATEGY`` (both frames refitted on their common view at STRATEGY's pose, then registered from
-it), ``icp``. ``--noise-free`` renders the same frames without the Kinect noise model. One BLAS thread, CPU time.
+it), ``icp``. ``--schedules`` then runs the odometry itself (``run_odometry``, each frame fitted by the schedule from
+its own seed) under each named schedule. ``--noise-free`` renders the same frames without the Kinect noise model.
+One BLAS thread, CPU time.
 
 Prints per strategy and EM: registrations more than 2° or 3 cm off (of 39), the worst and median errors, CPU ms
 per registration; with ``--frames-table`` every frame's errors.
 
 Usage: ``python benchmarks/odometry_rotation_room.py [--seed 0] [--peak 110] [--n-frames 40]
-[--strategies identity overlap2 c2f truth fov-truth icp] [--variants textbook authors]
-[--frames-table] [--noise-free]``.
+[--strategies identity overlap2 c2f truth fov-truth icp] [--schedules overlap common-view]
+[--variants textbook authors] [--frames-table] [--noise-free]``.
 """
 import argparse
 import time
@@ -27,7 +29,7 @@ import numpy as np
 import trimesh
 from threadpoolctl import threadpool_limits
 
-from dgmm.odometry import pixel_primitives, read_sequence
+from dgmm.odometry import pixel_primitives, read_sequence, run_odometry
 from dgmm.odometry.frame_model import SCHEDULES, _fit_mixture
 from dgmm.odometry.overlap import register_d2d_overlap, seen_by
 from dgmm.odometry.pixels import FR3, PIXEL_STEP, backproject
@@ -61,6 +63,7 @@ def main():
     parser.add_argument("--peak", type=float, default=110.0)
     parser.add_argument("--n-frames", type=int, default=40)
     parser.add_argument("--strategies", nargs="+", default=["identity", "overlap2", "c2f", "truth", "fov-truth", "icp"])
+    parser.add_argument("--schedules", nargs="*", default=[], help="SCHEDULES names run by run_odometry")
     parser.add_argument("--variants", nargs="+", default=["textbook", "authors"])
     parser.add_argument("--scales", type=float, nargs="+", default=[0.3, 0.15, 0.08, 0.04, 0.0],
                         help="c2f: standard deviations (m) added to every component, stage by stage, ending 0")
@@ -79,7 +82,8 @@ def main():
     steps = [rotation_distance_deg(r, np.eye(3)) for r, _ in motions]
     print(f"{folder.name}{' noise-free' if args.noise_free else ''}: {n} frames, true steps {min(steps):.1f}-"
           f"{max(steps):.1f}° (median {np.median(steps):.1f})")
-    print("| strategy | EM | off (>2° or >3 cm) | worst (deg, cm) | median (deg, cm) | CPU ms/registration |")
+    print("| strategy | EM | off (>2° or >3 cm) | worst (deg, cm) | median (deg, cm) | CPU ms per registration "
+          "(schedules: per frame, fits included) |")
     print("|---|---|---|---|---|---|")
     schedule = SCHEDULES["fast"]
     table = {}
@@ -101,20 +105,31 @@ def main():
                     rotation, translation = register(strategy, i, ctx)
                     cpu += time.process_time() - start
                     result.append(errors(rotation, translation, *motions[i]))
-                result = np.array(result)
-                off = (result[:, 0] > MAX_DEG) | (result[:, 1] > MAX_M)
-                worst = np.argmax(result[:, 1])
-                print(f"| {strategy} | {variant if strategy != 'icp' else '–'} | {off.sum()} of {n - 1} | "
-                      f"{result[:, 0].max():.2f}, {100 * result[:, 1].max():.1f} (frame {worst}) | "
-                      f"{np.median(result[:, 0]):.2f}, {100 * np.median(result[:, 1]):.2f} | "
-                      f"{1000 * cpu / (n - 1):.0f} |", flush=True)
-                table[strategy, variant] = result
+                table[strategy, variant] = print_row(strategy, variant if strategy != "icp" else "–", result,
+                                                     cpu / (n - 1))
+            for name in args.schedules:
+                odometry = run_odometry(sequence, "gmm-pixels", intrinsics=FR3, schedule=name, variant=variant)
+                result = [errors(r.rotation, r.translation, *motion)
+                          for r, motion in zip(odometry.registrations, motions)]
+                table[f"schedule {name}", variant] = print_row(f"schedule {name}", variant, result,
+                                                               odometry.cpu_seconds.mean())
     if args.frames_table:
         keys = list(table)
         print("frame step° | " + " | ".join(f"{s}/{v[:4]}" for s, v in keys))
         for i in range(n - 1):
             print(f"{i:3d} {steps[i]:4.1f} | " + " | ".join(
                 f"{table[k][i, 0]:5.2f}° {100 * table[k][i, 1]:5.1f}cm" for k in keys))
+
+
+def print_row(name, variant, result, cpu_seconds):
+    """Print one strategy's markdown row; return its (n, 2) errors (deg, m)."""
+    result = np.array(result)
+    off = (result[:, 0] > MAX_DEG) | (result[:, 1] > MAX_M)
+    worst = np.argmax(result[:, 1])
+    print(f"| {name} | {variant} | {off.sum()} of {len(result)} | "
+          f"{result[:, 0].max():.2f}, {100 * result[:, 1].max():.1f} (frame {worst}) | "
+          f"{np.median(result[:, 0]):.2f}, {100 * np.median(result[:, 1]):.2f} | {1000 * cpu_seconds:.0f} |", flush=True)
+    return result
 
 
 def register(strategy, i, ctx):

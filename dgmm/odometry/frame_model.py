@@ -39,6 +39,11 @@ EM_BLOCK_BYTES = 2**19
 in the CPU's cache. Two EM iterations of an fr1/xyz frame on one thread: 29.8 ms in one block, 26.1, 24.8 and 25.8 ms
 in 1 MiB, 512 KiB and 256 KiB blocks."""
 
+ROUND_TOL = 1e-4
+"""Gauss-Newton's stopping tolerance (pose change in radians and RMS radii) of a frame's registrations that a cut
+round follows (which starts from their pose), in place of the solver's 1e-8 for the last: fr1/xyz's ATE unchanged
+(0.0374 m, 798 frames, textbook EM), 10% less CPU per frame."""
+
 STARVED_WEIGHT = 0.1
 """Warm start: a component of the previous frame's mixture whose weight is below ``STARVED_WEIGHT / K`` restarts."""
 
@@ -194,12 +199,20 @@ def _register_d2d(fixed, moving, options):
                                                 schedule.solver)
     elif schedule.overlap_rounds:
         registration = register_d2d_overlap(fixed, moving, options["intrinsics"], schedule.overlap_rounds,
-                                            schedule.overlap_scales, schedule.solver)
+                                            schedule.overlap_scales, schedule.solver, _followed(schedule, 0))
     else:
-        registration = register_d2d(fixed, moving, solver=schedule.solver)
-    for _ in range(schedule.cut_rounds):
-        registration = register_measured(fixed, moving, registration, schedule.solver)
+        registration = register_d2d(fixed, moving, solver=schedule.solver, options=_followed(schedule, 0))
+    for done in range(1, schedule.cut_rounds + 1):
+        registration = register_measured(fixed, moving, registration, schedule.solver, _followed(schedule, done))
     return registration
+
+
+def _followed(schedule, done):
+    """Solver options of a frame's registration after ``done`` cut rounds: ``ROUND_TOL`` if a cut round follows
+    (Gauss-Newton only)."""
+    if done < schedule.cut_rounds and schedule.solver == "gauss-newton":
+        return {"tol": ROUND_TOL}
+    return None
 
 
 def _register_icp(fixed, moving, options):

@@ -173,7 +173,7 @@ class _Fitted:
     precisions_cholesky_: np.ndarray
 
 
-def register_measured(fixed, moving, first, solver="gauss-newton"):
+def register_measured(fixed, moving, first, solver="gauss-newton", options=None):
     """D2D from the pose of the registration ``first`` on the parts of each frame the other measures there.
 
     Parameters
@@ -182,6 +182,8 @@ def register_measured(fixed, moving, first, solver="gauss-newton"):
     first : Registration
         ``x_fixed = R x_moving + t`` of the whole frames.
     solver : {"bfgs", "gauss-newton"}
+    options : dict, optional
+        The solver's (:func:`dgmm.registration.register_d2d`).
 
     Returns
     -------
@@ -191,6 +193,6 @@ def register_measured(fixed, moving, first, solver="gauss-newton"):
     rotation, translation = first.rotation, first.translation
     fixed_unseen, moving_unseen = unseen_primitives(fixed, moving, rotation, translation)
     second = register_d2d(_cut_mixture(fixed, fixed_unseen), _cut_mixture(moving, moving_unseen),
-                          initial_rotation=rotation, initial_translation=translation, solver=solver)
+                          initial_rotation=rotation, initial_translation=translation, options=options, solver=solver)
     return dataclasses.replace(second, iterations=first.iterations + second.iterations,
                                seconds=first.seconds + second.seconds)

@@ -53,7 +53,7 @@ class _Components:
         self.precisions_cholesky_ = np.asarray(mixture.precisions_cholesky_)[keep]
 
 
-def register_d2d_overlap(fixed, moving, intrinsics, rounds=3, scales=(0.0,), solver="gauss-newton"):
+def register_d2d_overlap(fixed, moving, intrinsics, rounds=3, scales=(0.0,), solver="gauss-newton", options=None):
     """D2D of two frames' mixtures (camera coordinates) on the components the other camera sees, round by round.
 
     Every round keeps the fixed mixture's components whose mean the moving camera sees at the current pose and
@@ -76,6 +76,8 @@ def register_d2d_overlap(fixed, moving, intrinsics, rounds=3, scales=(0.0,), sol
         Widening in RMS radii of the moving mixture, non-increasing; ending with 0 registers the mixtures
         themselves last, ending above 0 leaves that to what follows (the odometry's cut rounds).
     solver : {"bfgs", "gauss-newton"}
+    options : dict, optional
+        The solver's, for every round (:func:`dgmm.registration.register_d2d`).
 
     Returns
     -------
@@ -100,7 +102,7 @@ def register_d2d_overlap(fixed, moving, intrinsics, rounds=3, scales=(0.0,), sol
             pair = _Components(fixed, keep_fixed), _Components(moving, keep_moving)
             if scale > 0:
                 pair = tuple(WidenedMixture(mixture, (scale * radius) ** 2) for mixture in pair)
-            registration = register_d2d(*pair, rotation, translation, solver=solver)
+            registration = register_d2d(*pair, rotation, translation, options=options, solver=solver)
             rotation, translation = registration.rotation, registration.translation
             iterations, seconds = iterations + registration.iterations, seconds + registration.seconds
     if registration is None:
