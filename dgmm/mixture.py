@@ -398,8 +398,8 @@ class GaussianMixture(BaseEstimator):
         when it is not empty.
     e_step_params_ : tuple of ndarray
         ``(weights, means, precisions_cholesky)`` whose E-step gave the responsibilities of the last M-step (the
-        parameters before it): with :func:`responsibilities` they take a primitive's share out of that M-step
-        exactly, as :mod:`dgmm.odometry.measured_cut` does.
+        parameters before it): with ``dgmm.mixture.responsibilities`` they take a primitive's share out of that
+        M-step exactly, as :mod:`dgmm.odometry.measured_cut` does.
     """
 
     def __init__(self, n_components=1, *, init="kmeans", max_iter=25, tol=1e-12, reg_covar=1e-6,
