@@ -238,25 +238,37 @@ def _e_step_block(table, scale, coefficients, rows, out):
     return resp, _normalise_in_place(resp)
 
 
-def responsibilities(prims, weights, means, precisions_cholesky, scale=1.0):
+def _log_rho_blocks(prims, weights, means, covariances, precisions_cholesky, scale=1.0):
+    """``log rho`` of a mixture given in data units, block by block over ``prims`` (cache-sized blocks of
+    ``_SCORE_BLOCK_BYTES``), computed in the mixture's own internal units (module docstring), with the E-step
+    ``scale`` on each primitive's expected log-density (a float, or one per primitive)."""
+    centre = weights @ means
+    unit, _ = _unit(means - centre, covariances, weights)
+    params = (weights, (means - centre) / unit, precisions_cholesky * unit)
+    scale = np.broadcast_to(np.asarray(scale, dtype=float), (len(prims),))
+    rows = max(1, _SCORE_BLOCK_BYTES // (8 * len(weights)))
+    for start in range(0, len(prims), rows):
+        block = slice(start, start + rows)
+        features = _moment_features(prims.means[block], prims.covariances[block], centre, scale[block], unit)
+        yield _log_rho(features, params, unit=unit)
+
+
+def responsibilities(prims, weights, means, covariances, precisions_cholesky, scale=1.0):
     """Responsibilities of ``prims`` under a mixture, shape (n_prims, n_components), as EM's E-step computes them.
 
     Parameters
     ----------
     prims : Primitives
-    weights, means, precisions_cholesky : ndarrays of shape (K,), (K, 3), (K, 3, 3)
-        In data units (e.g. a fitted mixture's ``e_step_params_``).
+    weights, means, covariances, precisions_cholesky : ndarrays of shape (K,), (K, 3), (K, 3, 3), (K, 3, 3)
+        In data units (a fitted mixture's attributes, or its ``e_step_params_``).
     scale : float or ndarray of shape (n_prims,), default=1.0
         The E-step's factor on each primitive's expected log-density (a variant's, :mod:`dgmm.variants`; 1 is
         the textbook E-step).
     """
-    centre = weights @ means
-    covariances = np.linalg.inv(precisions_cholesky @ np.swapaxes(precisions_cholesky, 1, 2))
-    unit, _ = _unit(means - centre, covariances, weights)
-    features = _moment_features(prims.means, prims.covariances, centre, scale, unit)
-    resp = _log_rho(features, (weights, (means - centre) / unit, precisions_cholesky * unit), unit=unit)
-    _normalise_in_place(resp)
-    return resp
+    blocks = list(_log_rho_blocks(prims, weights, means, covariances, precisions_cholesky, scale))
+    for block in blocks:
+        _normalise_in_place(block)
+    return np.concatenate(blocks)
 
 
 def _m_step_sums(resp, table, mstep_weights, rows):
@@ -397,9 +409,9 @@ class GaussianMixture(BaseEstimator):
         The bound after each iteration (but the last when ``tol`` is None); ``history_[-1] == lower_bound_``
         when it is not empty.
     e_step_params_ : tuple of ndarray
-        ``(weights, means, precisions_cholesky)`` whose E-step gave the responsibilities of the last M-step (the
-        parameters before it): with ``dgmm.mixture.responsibilities`` they take a primitive's share out of that
-        M-step exactly, as :mod:`dgmm.odometry.measured_cut` does.
+        ``(weights, means, covariances, precisions_cholesky)`` whose E-step gave the responsibilities of the last
+        M-step (the parameters before it): with ``dgmm.mixture.responsibilities`` they take a primitive's share out
+        of that M-step exactly, as :mod:`dgmm.odometry.measured_cut` does.
     """
 
     def __init__(self, n_components=1, *, init="kmeans", max_iter=25, tol=1e-12, reg_covar=1e-6,
@@ -560,7 +572,9 @@ class GaussianMixture(BaseEstimator):
                     break
         self.lower_bound_ = float(bound)
         weights, means, prec_chol = e_step_params
-        self.e_step_params_ = (weights, means * unit + centre, prec_chol / unit)
+        prec_chol = prec_chol / unit
+        self.e_step_params_ = (weights, means * unit + centre,
+                               np.linalg.inv(prec_chol @ np.swapaxes(prec_chol, 1, 2)), prec_chol)
         return self
 
     # -- evaluation -------------------------------------------------------------------------------------
@@ -570,17 +584,9 @@ class GaussianMixture(BaseEstimator):
             raise InputError("this GaussianMixture is not fitted yet: call fit first")
 
     def _log_rho_blocks(self, prims):
-        """``log rho`` of the fitted mixture (textbook E-step), block by block over the primitives, computed in
-        the mixture's own internal units (module docstring)."""
+        """``log rho`` of the fitted mixture (textbook E-step), block by block over the primitives."""
         self._check_fitted()
-        centre = self.weights_ @ self.means_
-        unit, _ = _unit(self.means_ - centre, self.covariances_, self.weights_)
-        params = (self.weights_, (self.means_ - centre) / unit, self.precisions_cholesky_ * unit)
-        rows = max(1, _SCORE_BLOCK_BYTES // (8 * len(self.weights_)))
-        for start in range(0, len(prims), rows):
-            block = slice(start, start + rows)
-            features = _moment_features(prims.means[block], prims.covariances[block], centre, 1.0, unit)
-            yield _log_rho(features, params, unit=unit)
+        return _log_rho_blocks(prims, self.weights_, self.means_, self.covariances_, self.precisions_cholesky_)
 
     def _log_norm(self, prims):
         log_norm = np.concatenate([_log_normaliser(block) for block in self._log_rho_blocks(prims)])
@@ -620,11 +626,9 @@ class GaussianMixture(BaseEstimator):
 
     def predict_proba(self, X):
         """Responsibilities ``eta`` of each component for each point or primitive, shape (n, n_components)."""
-        prims = as_primitives(X)
-        blocks = list(self._log_rho_blocks(prims))
-        for block in blocks:
-            _normalise_in_place(block)
-        return np.concatenate(blocks)
+        self._check_fitted()
+        return responsibilities(as_primitives(X), self.weights_, self.means_, self.covariances_,
+                                self.precisions_cholesky_)
 
     def sample(self, n_samples=1):
         """Draw ``n_samples`` points; returns (X of shape (n_samples, 3), component labels)."""
