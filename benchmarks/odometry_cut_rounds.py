@@ -2,9 +2,10 @@
 
 Each frame is fitted as the sweep's odometry fits it (its own seed, the schedule's start and EM), then every
 consecutive pair is registered by the schedule's widened overlap round and by cut rounds one after another
-(``dgmm.odometry.measured_cut.register_measured`` from the last pose, each to the solver's own tolerance); the errors against the rendered truth after
-each round are printed (worst and median over the pairs, and the pair ``--pair`` alone). Last, the bias of the cut
-itself: both frames cut at the true motion and registered from it. One BLAS thread.
+(``dgmm.odometry.measured_cut.register_measured`` from the last pose, each to the solver's own tolerance); the
+errors against the rendered truth after each round are printed (worst and median over the pairs, and the pair
+``--pair`` alone). Last, the bias of the cut itself: both frames cut at the true motion and registered from it. One
+BLAS thread.
 
 Usage: ``python benchmarks/odometry_cut_rounds.py [--seed 0] [--rounds 5] [--pair 0] [--variants textbook authors]``
 (the room sequence is written once under results/benchmarks, as ``benchmarks/odometry_rotation_room.py`` does).
@@ -16,6 +17,7 @@ from pathlib import Path
 import numpy as np
 from threadpoolctl import threadpool_limits
 
+from dgmm.odometry import frame_motions
 from dgmm.odometry.frame_model import SCHEDULES, _prepare_pixels
 from dgmm.odometry.measured_cut import _cut_mixture, register_measured, unseen_primitives
 from dgmm.odometry.overlap import register_d2d_overlap
@@ -37,9 +39,7 @@ def main():
                              110.0)
     _, truth = sequence.groundtruth_at_frames()
     schedule = SCHEDULES["overlap"]
-    motions = [(truth.rotations[i].T @ truth.rotations[i + 1],
-                truth.rotations[i].T @ (truth.translations[i + 1] - truth.translations[i]))
-               for i in range(len(sequence) - 1)]
+    motions = list(zip(*frame_motions(truth)))
     print(f"room seed {args.seed}: {len(motions)} pairs; translation error (cm) after each stage: worst, median "
           f"(pair {args.pair})")
     for variant in args.variants:

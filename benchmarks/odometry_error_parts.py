@@ -19,18 +19,12 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 import numpy as np  # noqa: E402
 from threadpoolctl import threadpool_limits  # noqa: E402
 
-from dgmm.odometry import (CAMERAS, Trajectory, absolute_trajectory_error, first_frames, read_sequence,  # noqa: E402
-                           run_odometry, sequence_intrinsics)
+from dgmm.odometry import (CAMERAS, Trajectory, absolute_trajectory_error, first_frames, frame_motions,  # noqa: E402
+                           read_sequence, run_odometry, sequence_intrinsics)
 from dgmm.odometry.tum import associate  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from odometry_peers import FR1_XYZ, run_peer, small_gicp_method  # noqa: E402
-
-
-def motions(rotations, translations):
-    """Frame-to-frame motions ``(R_k⁻¹ R_{k+1}, R_k⁻¹ (t_{k+1} - t_k))``."""
-    return (np.einsum("nba,nbc->nac", rotations[:-1], rotations[1:]),
-            np.einsum("nba,nb->na", rotations[:-1], translations[1:] - translations[:-1]))
 
 
 def compose(timestamps, steps, shifts):
@@ -46,8 +40,8 @@ def parts(name, estimate, groundtruth):
     """Print the ATE of ``estimate`` and of its recompositions with true rotations, translations, scaled shifts."""
     rows, truth_rows = associate(estimate.timestamps, groundtruth.timestamps)
     timestamps = estimate.timestamps[rows]
-    steps, shifts = motions(estimate.rotations[rows], estimate.translations[rows])
-    true_steps, true_shifts = motions(groundtruth.rotations[truth_rows], groundtruth.translations[truth_rows])
+    steps, shifts = frame_motions(estimate.subset(rows))
+    true_steps, true_shifts = frame_motions(groundtruth.subset(truth_rows))
 
     def ate(*motion):
         return absolute_trajectory_error(compose(timestamps, *motion), groundtruth).rmse

@@ -29,7 +29,7 @@ import numpy as np
 import trimesh
 from threadpoolctl import threadpool_limits
 
-from dgmm.odometry import pixel_primitives, read_sequence, run_odometry
+from dgmm.odometry import frame_motions, pixel_primitives, read_sequence, run_odometry
 from dgmm.odometry.frame_model import SCHEDULES, _fit_mixture
 from dgmm.odometry.overlap import register_d2d_overlap, seen_by
 from dgmm.odometry.pixels import FR3, PIXEL_STEP, backproject
@@ -77,8 +77,7 @@ def main():
     sequence = room_sequence(folder, args.n_frames, args.seed, args.peak)
     _, truth = sequence.groundtruth_at_frames()
     n = len(sequence)
-    motions = [(truth.rotations[i].T @ truth.rotations[i + 1],
-                truth.rotations[i].T @ (truth.translations[i + 1] - truth.translations[i])) for i in range(n - 1)]
+    motions = list(zip(*frame_motions(truth)))
     steps = [rotation_distance_deg(r, np.eye(3)) for r, _ in motions]
     print(f"{folder.name}{' noise-free' if args.noise_free else ''}: {n} frames, true steps {min(steps):.1f}-"
           f"{max(steps):.1f}° (median {np.median(steps):.1f})")
@@ -128,7 +127,8 @@ def print_row(name, variant, result, cpu_seconds):
     worst = np.argmax(result[:, 1])
     print(f"| {name} | {variant} | {off.sum()} of {len(result)} | "
           f"{result[:, 0].max():.2f}, {100 * result[:, 1].max():.1f} (frame {worst}) | "
-          f"{np.median(result[:, 0]):.2f}, {100 * np.median(result[:, 1]):.2f} | {1000 * cpu_seconds:.0f} |", flush=True)
+          f"{np.median(result[:, 0]):.2f}, {100 * np.median(result[:, 1]):.2f} | {1000 * cpu_seconds:.0f} |",
+          flush=True)
     return result
 
 

@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from dgmm.odometry import CAMERAS, first_frames, read_sequence, relative_pose_error, run_odometry
+from dgmm.odometry import CAMERAS, first_frames, frame_motions, read_sequence, relative_pose_error, run_odometry
 from dgmm.odometry import absolute_trajectory_error, sequence_intrinsics
 from dgmm.odometry.frame_model import SCHEDULES, Schedule
 from dgmm.registration import rotation_distance_deg
@@ -44,14 +44,9 @@ def parse_schedule(text):
 
 def frame_errors(trajectory, groundtruth):
     """Rotation (deg) and translation (m) error of every frame-to-frame motion against the ground truth's."""
-    rel_est = [(a.T @ b, a.T @ (tb - ta)) for a, b, ta, tb in zip(
-        trajectory.rotations[:-1], trajectory.rotations[1:], trajectory.translations[:-1], trajectory.translations[1:])]
-    rel_gt = [(a.T @ b, a.T @ (tb - ta)) for a, b, ta, tb in zip(
-        groundtruth.rotations[:-1], groundtruth.rotations[1:], groundtruth.translations[:-1],
-        groundtruth.translations[1:])]
-    rotation = np.array([rotation_distance_deg(e[0], g[0]) for e, g in zip(rel_est, rel_gt)])
-    translation = np.array([np.linalg.norm(e[1] - g[1]) for e, g in zip(rel_est, rel_gt)])
-    return rotation, translation
+    (estimated, shifts), (true, true_shifts) = frame_motions(trajectory), frame_motions(groundtruth)
+    rotation = np.array([rotation_distance_deg(e, g) for e, g in zip(estimated, true)])
+    return rotation, np.linalg.norm(shifts - true_shifts, axis=1)
 
 
 def translation_slope(trajectory, groundtruth, delta=10):

@@ -11,7 +11,7 @@ from scipy.spatial.transform import Rotation
 
 from dgmm.errors import InputError
 from dgmm.odometry.pixels import CAMERAS, parse_intrinsics, sequence_intrinsics
-from dgmm.odometry.metrics import absolute_trajectory_error, drift_metrics, relative_pose_error
+from dgmm.odometry.metrics import absolute_trajectory_error, drift_metrics, frame_motions, relative_pose_error
 from dgmm.odometry.tum import Trajectory, read_sequence, read_trajectory, write_trajectory
 
 FR1_XYZ = Path(__file__).resolve().parents[2] / "shared" / "data" / "tum" / "rgbd_dataset_freiburg1_xyz"
@@ -205,3 +205,19 @@ def test_odometry_composes_relative_poses_in_order(monkeypatch):
     np.testing.assert_allclose(result.trajectory.rotations, expected_rotations, atol=1e-12)
     np.testing.assert_allclose(result.trajectory.translations, expected_translations, atol=1e-12)
     np.testing.assert_allclose(result.trajectory.timestamps, 1.0 + np.arange(n) / 30)
+
+
+def test_frame_motions_are_the_motions_a_trajectory_was_composed_from():
+    """A trajectory composed here from random motions, one frame at a time (``T_{k+1} = T_k M_k``), gives back
+    those motions."""
+    rng = np.random.default_rng(3)
+    steps = Rotation.random(6, random_state=rng).as_matrix()
+    shifts = rng.normal(size=(6, 3))
+    rotations, translations = [Rotation.random(random_state=rng).as_matrix()], [rng.normal(size=3)]
+    for step, shift in zip(steps, shifts):
+        translations.append(rotations[-1] @ shift + translations[-1])
+        rotations.append(rotations[-1] @ step)
+    trajectory = Trajectory(np.arange(7.0), np.array(rotations), np.array(translations))
+    got_rotations, got_translations = frame_motions(trajectory)
+    np.testing.assert_allclose(got_rotations, steps, atol=1e-12)
+    np.testing.assert_allclose(got_translations, shifts, atol=1e-12)

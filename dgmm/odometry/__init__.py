@@ -19,13 +19,13 @@ Conventions: poses map camera to world, ``x_w = R x_c + t``; a trajectory holds 
 """
 from dgmm.odometry.frame_model import METHODS, MIXTURE_METHODS, SCHEDULES, UNSIZED_METHODS, Schedule, odometry_runs
 from dgmm.odometry.loop import Odometry, OdometryFrame, frame_seconds, run_odometry, seconds_summary
-from dgmm.odometry.metrics import absolute_trajectory_error, drift_metrics, relative_pose_error
+from dgmm.odometry.metrics import absolute_trajectory_error, drift_metrics, frame_motions, relative_pose_error
 from dgmm.odometry.pixels import (CAMERAS, Intrinsics, backproject, parse_intrinsics, pixel_primitives,
                                   sequence_intrinsics)
 from dgmm.odometry.tum import Trajectory, TumSequence, first_frames, read_sequence, read_trajectory, write_trajectory
 
 __all__ = ["CAMERAS", "METHODS", "MIXTURE_METHODS", "SCHEDULES", "UNSIZED_METHODS", "Intrinsics", "Odometry",
            "OdometryFrame", "Schedule", "Trajectory", "TumSequence", "absolute_trajectory_error", "backproject",
-           "drift_metrics", "first_frames", "frame_seconds", "odometry_runs", "parse_intrinsics", "pixel_primitives",
-           "read_sequence", "read_trajectory", "relative_pose_error", "run_odometry", "seconds_summary",
-           "sequence_intrinsics", "write_trajectory"]
+           "drift_metrics", "first_frames", "frame_motions", "frame_seconds", "odometry_runs", "parse_intrinsics",
+           "pixel_primitives", "read_sequence", "read_trajectory", "relative_pose_error", "run_odometry",
+           "seconds_summary", "sequence_intrinsics", "write_trajectory"]

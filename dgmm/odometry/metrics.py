@@ -101,6 +101,24 @@ def _relative(rotations, translations, first, second):
     return rotation, translation
 
 
+def frame_motions(trajectory):
+    """Every frame's motion to the next, ``T_k⁻¹ T_{k+1}`` (what frame-to-frame odometry estimates).
+
+    Parameters
+    ----------
+    trajectory : dgmm.odometry.Trajectory
+
+    Returns
+    -------
+    rotations : ndarray of shape (n_frames - 1, 3, 3)
+    translations : ndarray of shape (n_frames - 1, 3)
+        In frame ``k``'s camera coordinates.
+    """
+    n = len(trajectory)
+    return _relative(np.asarray(trajectory.rotations), np.asarray(trajectory.translations), np.arange(n - 1),
+                     np.arange(1, n))
+
+
 def relative_pose_error(estimate, reference, window=RPE_WINDOW_SECONDS, max_difference=MAX_TIME_DIFFERENCE):
     """RPE of an estimated trajectory against ground truth, over windows of ``window`` seconds.
 
