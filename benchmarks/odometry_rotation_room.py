@@ -11,7 +11,8 @@ covariances widened by ``s² I`` over ``--scales``, each stage's Gauss-Newton fr
 (from the true motion), ``fov-truth`` (an oracle: both frames refitted on their common view under the true
 motion), ``refit-STRATEGY`` (both frames refitted on their common view at STRATEGY's pose, then registered from
 it), ``icp``. ``--schedules`` then runs the odometry itself (``run_odometry``, each frame fitted by the schedule from
-its own seed) under each named schedule. ``--noise-free`` renders the same frames without the Kinect noise model.
+its own seed) under each schedule (a name or a spec of ``odometry_schedules.py``). ``--noise-free`` renders the same
+frames without the Kinect noise model.
 One BLAS thread, CPU time.
 
 Prints per strategy and EM: registrations more than 2° or 3 cm off (of 39), the worst and median errors, CPU ms
@@ -38,6 +39,7 @@ from dgmm.odometry.synthetic import (MAX_INCIDENCE_DEG, MAX_RANGE, MIN_RANGE, re
 from dgmm.primitives import Primitives
 from dgmm.coarse_to_fine import WidenedMixture
 from dgmm.registration import register_d2d, register_icp, rotation_distance_deg
+from odometry_schedules import parse_schedule  # this folder's script: schedule names and specs alike
 
 ROOT = Path(__file__).resolve().parents[1]
 BUNNY = ROOT.parent / "shared" / "data" / "stanford" / "bunny_res4.ply"
@@ -63,7 +65,8 @@ def main():
     parser.add_argument("--peak", type=float, default=110.0)
     parser.add_argument("--n-frames", type=int, default=40)
     parser.add_argument("--strategies", nargs="+", default=["identity", "overlap2", "c2f", "truth", "fov-truth", "icp"])
-    parser.add_argument("--schedules", nargs="*", default=[], help="SCHEDULES names run by run_odometry")
+    parser.add_argument("--schedules", nargs="*", default=[],
+                        help="run by run_odometry: SCHEDULES names or odometry_schedules.py's specs")
     parser.add_argument("--variants", nargs="+", default=["textbook", "authors"])
     parser.add_argument("--scales", type=float, nargs="+", default=[0.3, 0.15, 0.08, 0.04, 0.0],
                         help="c2f: standard deviations (m) added to every component, stage by stage, ending 0")
@@ -107,7 +110,8 @@ def main():
                 table[strategy, variant] = print_row(strategy, variant if strategy != "icp" else "–", result,
                                                      cpu / (n - 1))
             for name in args.schedules:
-                odometry = run_odometry(sequence, "gmm-pixels", intrinsics=FR3, schedule=name, variant=variant)
+                odometry = run_odometry(sequence, "gmm-pixels", intrinsics=FR3, schedule=parse_schedule(name),
+                                        variant=variant)
                 result = [errors(r.rotation, r.translation, *motion)
                           for r, motion in zip(odometry.registrations, motions)]
                 table[f"schedule {name}", variant] = print_row(f"schedule {name}", variant, result,

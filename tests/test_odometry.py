@@ -230,6 +230,9 @@ def test_odometry_on_synthetic_sequence(sequence, method, warm_iter, scale_error
     assert [frame.index for frame in logged] == frames.tolist()
     np.testing.assert_allclose(logged[-1].translation, result.trajectory.translations[-1])
     assert logged[0].registration is None and len(result.registration_seconds) == len(frames) - 1
+    # A frame's registration time is all of its registration call (a schedule's cuts too), not only its solver's.
+    assert np.all(result.registration_seconds > [registration.seconds for registration in result.registrations])
+    assert [frame.registration_seconds for frame in logged[1:]] == result.registration_seconds.tolist()
 
 
 # ---------------------------------------------------------------------------------------------- bad input

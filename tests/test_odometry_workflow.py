@@ -132,6 +132,8 @@ def test_mcap_poses_equal_the_trajectory_files(stage):
         frames = [message for _, message in by_topic["/odometry/frame"]]
         assert [frame["index"] for frame in frames] == list(range(N_FRAMES))
         assert frames[0]["registration_seconds"] is None and all(f["registration_seconds"] > 0 for f in frames[1:])
+        timed = [float(row["registration_seconds"]) for row in read_csv(job / "seconds.csv")[1:]]
+        assert [frame["registration_seconds"] for frame in frames[1:]] == pytest.approx(timed, rel=1e-12)
         written = tum_rows(job / "trajectory.txt")
         ((schema, estimated),) = by_topic["/odometry/estimated"]
         assert schema == "foxglove.PosesInFrame" and estimated.frame_id == "odometry"

@@ -344,7 +344,7 @@ def test_odometry_recorder_writes_trajectories_and_its_blueprint(tmp_path):
         for index in range(n_frames):
             registration = None if index == 0 else Registration(np.eye(3), np.zeros(3), 4, 0.01, 1.5, True, "d2d")
             recorder(OdometryFrame(index, float(truth.timestamps[index]), rotations[index], translations[index],
-                                   model, 0.02, registration))
+                                   model, 0.02, registration, None if index == 0 else 0.03))
         recorder.finish(truth)
 
     timeline, views = read_blueprint(rrd_path)
@@ -356,6 +356,8 @@ def test_odometry_recorder_writes_trajectories_and_its_blueprint(tmp_path):
     assert sorted(read_rrd(rrd_path, "/seconds/model")["frame"]) == list(range(n_frames))
 
     by_topic = {topic: (message, log_time) for topic, _, message, log_time in read_mcap(mcap_path)}
+    # The frame's whole registration time (0.03 s), not its solver's (Registration.seconds, 0.01 s).
+    assert by_topic["/odometry/frame"][0]["registration_seconds"] == 0.03
     estimated, log_time = by_topic["/odometry/estimated"]
     assert estimated.frame_id == "odometry" and log_time == int(truth.timestamps[-1] * 1e9)
     np.testing.assert_array_equal([xyz(p.position) for p in estimated.poses], translations)

@@ -38,6 +38,9 @@ class OdometryFrame:
         Time to build ``model`` (the GMM fit, or the sampling for ICP).
     registration : Registration or None
         This frame registered onto the previous one; None for the first frame.
+    registration_seconds : float or None
+        Time of that registration, all of it (a schedule's rounds and cuts; ``registration.seconds`` counts only
+        its solvers' time).
     """
 
     index: int
@@ -47,6 +50,7 @@ class OdometryFrame:
     model: object
     prepare_seconds: float
     registration: Registration | None
+    registration_seconds: float | None
 
 
 @dataclass(frozen=True)
@@ -61,7 +65,8 @@ class Odometry:
     prepare_seconds : ndarray of shape (n_frames,)
         Per-frame model building time (GMM fit; point sampling for ICP).
     registration_seconds : ndarray of shape (n_frames - 1,)
-        Per-frame registration time (``Registration.seconds``).
+        Per-frame registration time, all of it (a schedule's rounds and cuts; ``Registration.seconds`` counts only
+        its solvers' time).
     registrations : tuple of Registration
         Frame ``k+1`` onto frame ``k``, ``n_frames - 1`` of them.
     cpu_seconds : ndarray of shape (n_frames,)
@@ -135,7 +140,7 @@ def run_odometry(sequence, method, frames=None, *, intrinsics=FR3, n_components=
                "schedule": schedule if isinstance(schedule, Schedule) else SCHEDULES[schedule], "variant": variant,
                "size": size, "n_icp_points": n_icp_points, "icp_tol": icp_tol, "intrinsics": intrinsics}
     rotations, translations = [np.eye(3)], [np.zeros(3)]
-    previous, prepare_seconds, registrations, cpu_seconds = None, [], [], []
+    previous, prepare_seconds, registrations, registration_seconds, cpu_seconds = None, [], [], [], []
     for index in indices:  # sequential by nature: each pose composes the previous one
         depth = sequence.depth(index)
         if depth.shape != (intrinsics.height, intrinsics.width):
@@ -143,19 +148,23 @@ def run_odometry(sequence, method, frames=None, *, intrinsics=FR3, n_components=
                             f"intrinsics are for {intrinsics.width}x{intrinsics.height}")
         start, cpu_start = time.perf_counter(), time.process_time()
         model = prepare(depth, intrinsics, np.random.default_rng([seed, int(index)]), previous, options)
-        prepare_seconds.append(time.perf_counter() - start)
+        prepared = time.perf_counter()
         registration = None if previous is None else register(previous, model, options)
+        registered = time.perf_counter()
         cpu_seconds.append(time.process_time() - cpu_start)
+        prepare_seconds.append(prepared - start)
         if registration is not None:  # T_{k+1} = T_k (T_k⁻¹ T_{k+1})
             registrations.append(registration)
+            registration_seconds.append(registered - prepared)
             translations.append(rotations[-1] @ registration.translation + translations[-1])
             rotations.append(rotations[-1] @ registration.rotation)
         if callback is not None:
             callback(OdometryFrame(int(index), float(sequence.depth_timestamps[index]), rotations[-1],
-                                   translations[-1], model, prepare_seconds[-1], registration))
+                                   translations[-1], model, prepare_seconds[-1], registration,
+                                   registration_seconds[-1] if registration is not None else None))
         previous = model
     trajectory = Trajectory(sequence.depth_timestamps[indices], np.array(rotations), np.array(translations))
-    return Odometry(method, trajectory, np.array(prepare_seconds), np.array([r.seconds for r in registrations]),
+    return Odometry(method, trajectory, np.array(prepare_seconds), np.array(registration_seconds),
                     tuple(registrations), np.array(cpu_seconds))
 
 

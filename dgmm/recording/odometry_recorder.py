@@ -103,7 +103,7 @@ class OdometryRecorder(Recording):
         registration = frame.registration
         self._last_time = _ns(frame.timestamp)
         message = {"index": frame.index, "timestamp": frame.timestamp, "model_seconds": frame.prepare_seconds,
-                   "registration_seconds": None if registration is None else float(registration.seconds),
+                   "registration_seconds": frame.registration_seconds,
                    "iterations": None if registration is None else int(registration.iterations),
                    "converged": None if registration is None else bool(registration.converged),
                    "objective": None if registration is None else float(registration.objective)}
@@ -123,7 +123,7 @@ class OdometryRecorder(Recording):
         log("world/camera/model", shown, frame.index, "frame")
         log("seconds/model", rr.Scalars(frame.prepare_seconds), frame.index, "frame")
         if registration is not None:
-            log("seconds/registration", rr.Scalars(registration.seconds), frame.index, "frame")
+            log("seconds/registration", rr.Scalars(frame.registration_seconds), frame.index, "frame")
 
     def finish(self, trajectory):
         """Write the whole estimated trajectory (and the ground truth) as ``foxglove.PosesInFrame`` messages.
