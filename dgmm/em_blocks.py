@@ -1,9 +1,9 @@
 """Row blocks for EM over many primitives: bounded memory, several threads, sums in a fixed order.
 
-Of the ``(n_prims, n_components)`` responsibilities an EM iteration needs only their product with the moment
-table, ``respᵀ · moments`` of shape ``(n_components, 10)``, and each primitive's log-normaliser.
-:class:`BlockPass` computes such products block by block of rows, so memory holds one
-``(rows, n_components)`` block per thread, never the whole matrix.
+Of the ``(n_components, n_prims)`` responsibilities an EM iteration needs only their product with the moment
+table, ``resp · moments`` of shape ``(n_components, 10)``, and each primitive's log-normaliser.
+:class:`BlockPass` computes such products block by block of primitives, so memory holds one
+``(n_components, rows)`` block per thread, never the whole matrix.
 
 An input whose responsibilities fit in the memory limit is one block, computed exactly as without blocks (every
 fit of the paper sweep is). A larger one streams in blocks of :data:`CACHE_BLOCK_BYTES`: EM's passes over a
@@ -78,7 +78,7 @@ class BlockPass:
     def __init__(self, n_rows, n_components, memory_limit, n_jobs):
         rows = block_rows(n_rows, n_components, memory_limit)
         self.blocks = [slice(start, min(start + rows, n_rows)) for start in range(0, n_rows, rows)]
-        self._shape = (min(rows, n_rows), n_components)
+        self._shape = (n_components, min(rows, n_rows))
         self._threads = min(n_threads(n_jobs), len(self.blocks))
         self._local = threading.local()
         self._executor = None
@@ -95,16 +95,16 @@ class BlockPass:
         return self._stack.__exit__(*exc_info)
 
     def _buffer(self, rows):
-        """This thread's (rows, n_components) block buffer, allocated once (fresh pages cost as much as the
-        products written into them)."""
+        """This thread's (n_components, rows) block buffer, contiguous, allocated once (fresh pages cost as much
+        as the products written into them)."""
         buffer = getattr(self._local, "buffer", None)
         if buffer is None:
-            buffer = self._local.buffer = np.empty(self._shape)
-        return buffer[: rows.stop - rows.start]
+            buffer = self._local.buffer = np.empty(self._shape[0] * self._shape[1])
+        return buffer[: self._shape[0] * (rows.stop - rows.start)].reshape(self._shape[0], -1)
 
     def run(self, function, threads=True):
-        """``Σ_blocks function(rows, out)`` added in block order; ``out`` is a free (n_rows_in_block,
-        n_components) buffer. ``threads=False`` runs the blocks in order on the calling thread (for functions
+        """``Σ_blocks function(rows, out)`` added in block order; ``out`` is a free, C-contiguous (n_components,
+        n_rows_in_block) buffer. ``threads=False`` runs the blocks in order on the calling thread (for functions
         that draw from a random generator)."""
         call = lambda rows: function(rows, self._buffer(rows))  # noqa: E731
         if threads and self._executor is not None:

@@ -195,47 +195,54 @@ def _component_coefficients(weights, means, precisions_cholesky, unit=1.0):
 # E-step, M-step
 # ---------------------------------------------------------------------------------------------------------
 
-def _log_rho(features, params, out=None, unit=1.0):
-    """Weighted log-probabilities ``log rho`` of shape (n_rows, n_components), written to ``out`` if given.
+def _log_rho(features, params, unit=1.0):
+    """Weighted log-probabilities ``log rho``, shape (n_components, n_rows), one column per primitive (EM's
+    layout, :func:`_e_step_block`).
 
-    Reusing one ``out`` buffer across EM iterations avoids re-faulting a fresh (n_prims, n_components) array
-    every iteration, which costs as much as the product itself.
+    A view of the (n_rows, n_components) product: BLAS computes each of its rows the same whatever the other rows,
+    which the (n_components, n_rows) product's edge cases do not, so scores do not depend on how the primitives
+    are split.
     """
-    return np.dot(features, _component_coefficients(*params, unit=unit).T, out=out)
+    return np.dot(features, _component_coefficients(*params, unit=unit).T).T
 
 
 def _exp_shifted_in_place(log_rho):
-    """Replace ``log rho`` by ``exp(max(log rho − peak, floor))`` in place; return ``peak`` and the row sums,
+    """Replace ``log rho`` by ``exp(max(log rho − peak, floor))`` in place; return ``peak`` and the column sums,
     both (n_rows,)."""
-    peak = log_rho.max(axis=1)
-    log_rho -= peak[:, None]
+    peak = log_rho.max(axis=0)
+    log_rho -= peak
     np.maximum(log_rho, _LOG_FLOOR, out=log_rho)
     np.exp(log_rho, out=log_rho)
-    return peak, log_rho.sum(axis=1)
+    return peak, log_rho.sum(axis=0)
 
 
 def _normalise_in_place(log_rho):
-    """Turn ``log rho`` into responsibilities in place; return ``logsumexp_i log rho`` per row (n_rows,)."""
+    """Turn ``log rho`` into responsibilities in place; return ``logsumexp_i log rho`` per primitive (n_rows,)."""
     peak, total = _exp_shifted_in_place(log_rho)
-    log_rho /= total[:, None]
+    log_rho /= total
     return peak + np.log(total)
 
 
 def _log_normaliser(log_rho):
-    """``logsumexp_i log rho`` per row (n_rows,), overwriting ``log rho`` (scoring needs no responsibilities)."""
+    """``logsumexp_i log rho`` per primitive (n_rows,), overwriting ``log rho`` (scoring needs no
+    responsibilities)."""
     peak, total = _exp_shifted_in_place(log_rho)
     return peak + np.log(total)
 
 
 def _e_step_block(table, scale, coefficients, rows, out):
-    """Responsibilities of the primitives ``rows`` (in ``out``) and their log-normalisers.
+    """The E-step of the primitives ``rows``: ``rho / max_i rho`` (in ``out``, (n_components, n_rows)), each
+    primitive's sum of it, and its log-normaliser.
 
-    ``table`` is the unscaled moment table; its columns 0–9 are multiplied by the E-step ``scale`` here.
+    Responsibilities are ``rho`` over that sum; the M-step divides its weights by the sums instead of dividing
+    every responsibility. ``table`` is the unscaled moment table; its columns 0–9 are multiplied by the E-step
+    ``scale`` here.
     """
     features = table[rows].copy()
     features[:, :10] *= scale[rows, None]
-    resp = np.dot(features, coefficients.T, out=out)
-    return resp, _normalise_in_place(resp)
+    rho = np.dot(coefficients, features.T, out=out)  # the E-step's per-primitive passes run down its rows
+    peak, total = _exp_shifted_in_place(rho)
+    return rho, total, peak + np.log(total)
 
 
 def _log_rho_blocks(prims, weights, means, covariances, precisions_cholesky, scale=1.0):
@@ -268,13 +275,14 @@ def responsibilities(prims, weights, means, covariances, precisions_cholesky, sc
     blocks = list(_log_rho_blocks(prims, weights, means, covariances, precisions_cholesky, scale))
     for block in blocks:
         _normalise_in_place(block)
-    return np.concatenate(blocks)
+    return np.ascontiguousarray(np.concatenate(blocks, axis=1).T)
 
 
-def _m_step_sums(resp, table, mstep_weights, rows):
-    """``respᵀ ·`` (moment table columns 0–9 × M-step weight) over the primitives ``rows``: every component's
-    mass, first and second moment sums (eqs. 12, 13), shape (n_components, 10)."""
-    return resp.T @ (table[rows, :10] * mstep_weights[rows, None])
+def _m_step_sums(resp, moments, row_weights):
+    """``resp ·`` (``moments``, columns 0–9 of the moment table's rows, × ``row_weights``, their M-step
+    weights): every component's mass, first and second moment sums (eqs. 12, 13), shape (n_components, 10).
+    ``resp`` is (n_components, n_rows)."""
+    return resp @ (moments * row_weights[:, None])
 
 
 def _m_step(sums, reg_covar):
@@ -330,7 +338,7 @@ def _kmeans_resp(means, weights, n_components, rng):
 
     def block(rows, out):
         out.fill(0.0)
-        out[np.arange(len(out)), labels[rows]] = 1.0
+        out[labels[rows], np.arange(out.shape[1])] = 1.0
         return out
     return block
 
@@ -338,8 +346,8 @@ def _kmeans_resp(means, weights, n_components, rng):
 def _random_resp(means, weights, n_components, rng):
     """Uniform random soft responsibilities, normalised per primitive (drawn block after block)."""
     def block(rows, out):
-        resp = rng.uniform(size=out.shape)
-        return np.divide(resp, resp.sum(axis=1, keepdims=True), out=out)
+        resp = rng.uniform(size=out.shape[::-1])  # a row per primitive, drawn in primitive order
+        return np.divide(resp.T, resp.sum(axis=1), out=out)
     return block
 
 
@@ -470,7 +478,7 @@ class GaussianMixture(BaseEstimator):
         user = (self.weights_init, self.means_init, self.precisions_init)
         if any(value is None for value in user):
             resp = _INIT_RESP[self.init](prims.means / unit, mstep_weights, k, rng)
-            sums = blocks.run(lambda rows, out: _m_step_sums(resp(rows, out), table, mstep_weights, rows),
+            sums = blocks.run(lambda rows, out: _m_step_sums(resp(rows, out), table[rows, :10], mstep_weights[rows]),
                               threads=False)
             weights, means, prec_chol, _ = _m_step(sums, self.reg_covar / unit**2)
         if self.weights_init is not None:
@@ -536,8 +544,8 @@ class GaussianMixture(BaseEstimator):
             coefficients = _component_coefficients(*params, unit=unit)
 
             def block(rows, out):
-                resp, log_norm[rows] = _e_step_block(table, scale, coefficients, rows, out)
-                return _m_step_sums(resp, table, mstep_weights, rows)
+                rho, total, log_norm[rows] = _e_step_block(table, scale, coefficients, rows, out)
+                return _m_step_sums(rho, table[rows, :10], mstep_weights[rows] / total)
             sums = blocks.run(block)
             return sums, np.dot(mstep_weights, log_norm) / mstep_weights.sum()
 
@@ -622,7 +630,7 @@ class GaussianMixture(BaseEstimator):
     def predict(self, X):
         """Index of the most responsible component for each point or primitive."""
         prims = as_primitives(X)
-        return np.concatenate([block.argmax(axis=1) for block in self._log_rho_blocks(prims)])
+        return np.concatenate([block.argmax(axis=0) for block in self._log_rho_blocks(prims)])
 
     def predict_proba(self, X):
         """Responsibilities ``eta`` of each component for each point or primitive, shape (n, n_components)."""

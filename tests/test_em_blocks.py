@@ -29,7 +29,7 @@ def test_blocks_cover_the_rows_within_the_limit():
 def test_block_sums_are_added_in_block_order_with_fresh_buffers_per_block(n_jobs):
     """Float sums depend on their order: parts spanning 16 orders of magnitude, added in block order, must give
     exactly the left-to-right sum, whatever the threads (the reverse order differs, so the test can tell). Each
-    call gets a (rows, n_components) buffer of its thread, reused across calls; a result written in it and
+    call gets an (n_components, rows) buffer of its thread, reused across calls; a result written in it and
     returned must survive until it is added, so a buffer shared between threads (or handed out twice before its
     part is summed) fails."""
     n_rows, n_components = 1000, 4
@@ -38,15 +38,15 @@ def test_block_sums_are_added_in_block_order_with_fresh_buffers_per_block(n_jobs
     buffers = []
 
     def part(rows, out):
-        assert out.shape == (rows.stop - rows.start, n_components)
-        out[:] = values[rows]
+        assert out.shape == (n_components, rows.stop - rows.start) and out.flags.c_contiguous
+        out[:] = values[rows].T
         buffers.append(out.base if out.base is not None else out)
         time.sleep(0.002)  # lets another thread run: it would overwrite a shared buffer here
-        return out.sum(axis=0)
+        return out.sum(axis=1)
 
     with BlockPass(n_rows, n_components, memory_limit=8 * (n_components + 24) * 70, n_jobs=n_jobs) as blocks:
         assert len(blocks.blocks) == 15
-        parts = [values[rows].sum(axis=0) for rows in blocks.blocks]
+        parts = [np.ascontiguousarray(values[rows].T).sum(axis=1) for rows in blocks.blocks]
         in_order = functools.reduce(np.add, parts)
         assert not np.array_equal(in_order, functools.reduce(np.add, parts[::-1]))
         for _ in range(2):  # a second run reuses the buffers

@@ -9,14 +9,16 @@ import dataclasses
 import numpy as np
 import pytest
 from scipy.special import logsumexp
+from scipy.spatial.transform import Rotation
 from scipy.stats import multivariate_normal
 
 from dgmm.errors import InputError
 from dgmm.mixture import GaussianMixture
 from dgmm.odometry import CAMERAS, pixel_primitives
 from dgmm.odometry.frame_model import SCHEDULES
-from dgmm.odometry.measured_cut import MeasuredFrame, cut, seen_by, unseen_primitives
+from dgmm.odometry.measured_cut import MeasuredFrame, cut, pose_change, seen_by, unseen_primitives
 from dgmm.odometry.pixels import PIXEL_STEP
+from dgmm.registration import Registration
 
 ROS = CAMERAS["ros"]
 ROWS, COLS = ROS.height // PIXEL_STEP, ROS.width // PIXEL_STEP
@@ -172,3 +174,19 @@ def test_a_schedule_that_ends_widened_needs_cut_rounds():
     assert SCHEDULES["overlap"].overlap_scales[-1] > 0 and SCHEDULES["overlap"].cut_rounds > 0
     with pytest.raises(InputError, match="overlap_scales"):
         dataclasses.replace(SCHEDULES["overlap"], cut_rounds=0)
+
+
+def test_pose_change_is_the_centroid_shift_in_radii_or_the_turn_in_radians():
+    """Poses chosen here: a turn about the centroid moves it nowhere (the change is the angle), a pure translation
+    moves it by its length, and a turn about the origin moves it by the chord ``2 |c| sin(θ/2)``."""
+    centroid, radius = np.array([0.3, -0.2, 2.0]), 1.5
+    start = Registration(np.eye(3), np.zeros(3), 0, 0.0, 0.0, True, "d2d")
+    turn = Rotation.from_rotvec([0.0, 0.02, 0.0]).as_matrix()
+    about_centroid = dataclasses.replace(start, rotation=turn, translation=centroid - turn @ centroid)
+    assert pose_change(start, about_centroid, centroid, radius) == pytest.approx(0.02, rel=1e-12)
+    shifted = dataclasses.replace(start, translation=np.array([0.0, 0.003, 0.004]))
+    assert pose_change(start, shifted, centroid, radius) == pytest.approx(0.005 / radius, rel=1e-12)
+    about_origin = dataclasses.replace(start, rotation=turn)  # the chord is longer than 0.02 radii here
+    chord = 2 * np.linalg.norm(centroid[[0, 2]]) * np.sin(0.01)
+    assert pose_change(start, about_origin, centroid, radius) == pytest.approx(chord / radius, rel=1e-9)
+    assert pose_change(about_centroid, start, centroid, radius) == pytest.approx(0.02, rel=1e-12)

@@ -17,7 +17,8 @@ from threadpoolctl import threadpool_limits
 from dgmm.odometry import CAMERAS, first_frames, pixel_primitives, read_sequence, run_odometry
 from dgmm.odometry.em_start import lloyd_start
 from dgmm.odometry.frame_model import REG_COVAR, SCHEDULES, _fit_mixture
-from dgmm.odometry.overlap import seen_by
+from dgmm.odometry.measured_cut import register_cut_rounds, register_measured
+from dgmm.odometry.overlap import register_d2d_overlap, seen_by
 from dgmm.odometry.pixels import FR3
 from dgmm.odometry.synthetic import (room_scene, rotated_depth, spin, spinning_trajectory, write_spun_sequence,
                                      write_synthetic_sequence)
@@ -196,6 +197,38 @@ def test_registration_on_the_common_view_holds_where_whole_mixtures_slide(bunny_
         degrees, metres = _frame_errors(sequence, SCHEDULES[name], variant)[0]
         print(f", {name} {degrees:.2f}° {100 * metres:.2f} cm", end="")
         assert degrees < MAX_DEG and metres < MAX_M
+
+
+def test_cut_rounds_stop_once_a_round_moves_the_pose_by_less_than_tol(bunny_res4, tmp_path):
+    """The spinning room's first pair under ``overlap`` (its widened overlap round ends centimetres off, so the
+    rounds have work to do): each round is :func:`register_measured` from the pose before, and the rounds stop
+    after the first whose moving-mixture centroid moves by less than ``tol`` RMS radii and whose rotation moves by
+    less than ``tol`` radians, both measured here from the poses themselves (scipy's rotation angle)."""
+    sequence = _spinning_room(tmp_path / "spin", room_scene([bunny_res4.triangles]), 2)
+    frames = []
+    with threadpool_limits(1):
+        run_odometry(sequence, "gmm-pixels", intrinsics=FR3, callback=lambda frame: frames.append(frame.model))
+        fixed, moving = frames
+        schedule = SCHEDULES["overlap"]
+        first = register_d2d_overlap(fixed, moving, FR3, schedule.overlap_rounds, schedule.overlap_scales)
+        poses = [first]
+        for _ in range(4):
+            poses.append(register_measured(fixed, moving, poses[-1]))
+        weights, means = moving.weights_, moving.means_
+        centroid = weights @ means
+        radius = np.sqrt(weights @ np.sum((means - centroid) ** 2, axis=1))
+        changes = [max(np.linalg.norm(after.rotation @ centroid + after.translation
+                                      - before.rotation @ centroid - before.translation) / radius,
+                       Rotation.from_matrix(after.rotation @ before.rotation.T).magnitude())
+                   for before, after in zip(poses, poses[1:])]
+        assert changes[0] > 0.01 and changes[0] > changes[1] > changes[2] > changes[3]  # each round leaves less
+        for stop in (1, 2, 3):  # a tol just above round `stop`'s change, then just below it
+            registration = register_cut_rounds(fixed, moving, first, 4, 1.01 * changes[stop - 1])
+            np.testing.assert_array_equal(registration.translation, poses[stop].translation)
+            registration = register_cut_rounds(fixed, moving, first, 4, 0.99 * changes[stop - 1])
+            np.testing.assert_array_equal(registration.translation, poses[stop + 1].translation)
+        registration = register_cut_rounds(fixed, moving, first, 2, 0.0)  # never settled: every round runs
+        np.testing.assert_array_equal(registration.rotation, poses[2].rotation)
 
 
 @pytest.mark.slow

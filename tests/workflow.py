@@ -19,9 +19,9 @@ RERUN = Path(sys.executable).with_name("rerun")
 # row is unchanged): changes to how jobs run must leave every number as it was. They hold for this machine's numpy and
 # OpenBLAS; a platform whose arithmetic differs in the last bits changes them, and then they are updated on purpose.
 TABLE_SHA256 = {
-    "likelihood.csv": "aef0b7af7411d294a796b6ae0600ea7cd026bf54058e4e416f70cd26b5f44668",
-    "registration.csv": "b2de3242a76cfc53ce0932545c8a03d66bd83df7da4f5262485646b58888b000",
-    "odometry.csv": "c913ec28c3f60868cfb88719926eb8d9b3de22f7212d6bfaba1b91bb9b8275a5",
+    "likelihood.csv": "3d0c51c9731daea1632da6de217800532df4a3286b6f5e52acb14642877f2078",
+    "registration.csv": "30bfd65c83f9d8c440108d0531b4a055e7a981ce2bb3e4c5a7de041c64a2cb41",
+    "odometry.csv": "c687d3e6d8c1ad5a96ef72fc26a2de4112d0404c9c562d026125fc37b5d5fa77",
 }
 
 

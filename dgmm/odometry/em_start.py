@@ -14,6 +14,9 @@ import numpy as np
 from dgmm.variants import VARIANTS
 
 _ROWS, _COLS = np.array([0, 1, 2, 0, 0, 1]), np.array([0, 1, 2, 1, 2, 2])  # the 6 distinct entries of a 3x3
+_LABEL_BLOCK_BYTES = 2**19
+"""A Lloyd pass labels the primitives in blocks whose distances take this many bytes: they stay in the CPU's cache
+between the product and the argmin (an fr1/xyz frame, K = 100: 1.7 ms per pass in one block, 1.0 in these)."""
 _FULL = np.array([[0, 3, 4], [3, 1, 5], [4, 5, 2]])  # each entry of the full 3x3 in those 6
 
 
@@ -70,9 +73,12 @@ def lloyd_start(prims, n_components, seed_sample, lloyd_iter, variant, rng, reg_
     sample = rng.choice(len(points), size=min(seed_sample, len(points)), replace=False)
     centres = points[sample[kmeans_plusplus(points[sample], weights[sample], n_components, rng)]]
     lifted = np.hstack([points, np.ones((len(points), 1))])
+    rows = max(1, _LABEL_BLOCK_BYTES // (8 * n_components))
     for _ in range(lloyd_iter + 1):  # the last pass only labels
         # |x - c|² - |x|² = [x, 1] · [-2c, |c|²]: one product, the |x|² every row shares left out of the argmin
-        labels = (lifted @ np.vstack([-2.0 * centres.T, np.sum(centres ** 2, axis=1)])).argmin(axis=1)
+        lifted_centres = np.vstack([-2.0 * centres.T, np.sum(centres ** 2, axis=1)])
+        labels = np.concatenate([(lifted[start:start + rows] @ lifted_centres).argmin(axis=1)
+                                 for start in range(0, len(points), rows)])
         mass = np.bincount(labels, weights, minlength=n_components)
         present = mass > 0
         sums = np.stack([np.bincount(labels, weights * points[:, d], minlength=n_components) for d in range(3)], 1)
