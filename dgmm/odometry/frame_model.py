@@ -141,9 +141,9 @@ primitives, 3 Lloyd iterations and 2 EM iterations on every primitive, Gauss-New
 ``"overlap"``, the sweep's default: the same mixtures, registered first on the components each camera sees of the
 other, widened by 0.0625 RMS radii (it keeps fast turns in the right basin), then up to three times, until the pose
 settles (:data:`CUT_TOL`), cut to the primitives each frame measures of the other at the pose so far and registered
-again (``cut_rounds``): what only one frame measured no longer pulls the estimate toward the identity. ``"common-view"``: two overlap rounds at each
-of five widenings, then both frames refitted twice on the primitives the other camera sees (robust where views
-change fastest, at about five times the CPU). ``"reference"``: scikit-learn's k-means on every primitive, 25 EM
+again (``cut_rounds``): what only one frame measured no longer pulls the estimate toward the identity.
+``"common-view"``: two overlap rounds at each of five widenings, then both frames refitted twice on the primitives
+the other camera sees (robust where views change fastest, at about five times the CPU). ``"reference"``: scikit-learn's k-means on every primitive, 25 EM
 iterations (the fitting experiments' count; the paper does not state the odometry's) and the paper's BFGS."""
 
 
