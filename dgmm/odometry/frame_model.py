@@ -143,8 +143,9 @@ other, widened by 0.0625 RMS radii (it keeps fast turns in the right basin), the
 settles (:data:`CUT_TOL`), cut to the primitives each frame measures of the other at the pose so far and registered
 again (``cut_rounds``): what only one frame measured no longer pulls the estimate toward the identity.
 ``"common-view"``: two overlap rounds at each of five widenings, then both frames refitted twice on the primitives
-the other camera sees (robust where views change fastest, at about five times the CPU). ``"reference"``: scikit-learn's k-means on every primitive, 25 EM
-iterations (the fitting experiments' count; the paper does not state the odometry's) and the paper's BFGS."""
+the other camera sees (robust where views change fastest, at about five times the CPU). ``"reference"``:
+scikit-learn's k-means on every primitive, 25 EM iterations (the fitting experiments' count; the paper does not state
+the odometry's) and the paper's BFGS."""
 
 
 def _fit_mixture(prims, rng, previous, options):
