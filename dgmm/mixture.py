@@ -11,9 +11,9 @@ second moment, so both become one GEMM each over a (n_prims, 11) table of moment
   ``Sigma_i = Σ_p w_ip E_p[x xᵀ] / W_i − mu_i mu_iᵀ + reg_covar I`` (eqs. 12, 13).
 * Bound: ``Σ_p alpha_p logsumexp_i(log rho_ip) / Σ_p alpha_p`` (eq. 11); the mean log-likelihood for points.
 
-The M-step needs of the responsibilities only ``respᵀ · moments`` (n_components, 10), so each iteration streams
-over blocks of primitives (``dgmm.em_blocks``): memory is O(n_prims × 11 + block × n_components), and blocks
-may run on several threads without changing a bit of the result.
+The M-step needs of the (n_components, n_prims) responsibilities only ``resp · moments`` (n_components, 10), so
+each iteration streams over blocks of primitives (``dgmm.em_blocks``): memory is O(n_prims × 11 + block ×
+n_components), and blocks may run on several threads without changing a bit of the result.
 
 Read top to bottom: checks, moment features, E-step, M-step, initialisation, estimator (the EM variants are in
 :mod:`dgmm.variants`).

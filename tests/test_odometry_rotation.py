@@ -186,8 +186,8 @@ def _frame_errors(sequence, schedule, variant):
 def test_registration_on_the_common_view_holds_where_whole_mixtures_slide(bunny_res4, tmp_path, variant):
     """The spinning room's first two frames (true motion 3.9°, no translation): D2D of the whole mixtures slides
     one frame's tiling of the walls along the other's (more than 3 cm off, the case has power). Within 2° and 3 cm
-    of the rendered truth: the sweep's ``overlap`` (the components each camera sees, widened, then three rounds on the
-    primitives each frame measures of the other; one round leaves it 6.5 cm off with textbook EM) and
+    of the rendered truth: the sweep's ``overlap`` (the components each camera sees, widened, then up to three
+    rounds on the primitives each frame measures of the other; one round leaves it 6.5 cm off with textbook EM) and
     ``common-view`` (the overlap coarse to fine, then both frames refitted twice on their common view)."""
     sequence = _spinning_room(tmp_path / "spin", room_scene([bunny_res4.triangles]), 2)
     whole = _frame_errors(sequence, SCHEDULES["fast"], variant)[0]

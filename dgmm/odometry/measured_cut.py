@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from dgmm.mixture import responsibilities
+from dgmm.odometry.overlap import centroid_and_radius
 from dgmm.primitives import Primitives
 from dgmm.registration import register_d2d, rotation_distance_deg
 from dgmm.variants import VARIANTS
@@ -224,9 +225,7 @@ def register_cut_rounds(fixed, moving, first, rounds, tol, solver="gauss-newton"
     Registration
         The last round's, ``seconds`` and ``iterations`` counting every round and ``first``.
     """
-    weights, means = moving.weights_, moving.means_
-    centroid = weights @ means
-    radius = np.sqrt(weights @ np.sum((means - centroid) ** 2, axis=1))
+    centroid, radius = centroid_and_radius(moving)
     registration = first
     for _ in range(int(rounds)):
         before, registration = registration, register_measured(fixed, moving, registration, solver, options)

@@ -42,6 +42,13 @@ def seen_by(means, rotation, translation, intrinsics):
     return front & (u >= -0.5) & (u < intrinsics.width - 0.5) & (v >= -0.5) & (v < intrinsics.height - 0.5)
 
 
+def centroid_and_radius(mixture):
+    """The weighted centroid of a mixture's means, shape (3,), and their weighted RMS distance to it."""
+    weights, means = np.asarray(mixture.weights_), np.asarray(mixture.means_)
+    centroid = weights @ means / weights.sum()
+    return centroid, float(np.sqrt(weights @ np.sum((means - centroid) ** 2, axis=1) / weights.sum()))
+
+
 class _Components:
     """The fitted arrays of ``mixture`` (what D2D reads) restricted to the components ``keep``."""
 
@@ -88,9 +95,8 @@ def register_d2d_overlap(fixed, moving, intrinsics, rounds=3, scales=(0.0,), sol
     if int(rounds) < 1:
         raise InputError(f"rounds must be at least 1, got {rounds!r}")
     scales = _check_scales(scales, end_at_zero=False)
-    weights, means = np.asarray(moving.weights_), np.asarray(moving.means_)
-    centroid = weights @ means / weights.sum()
-    radius = float(np.sqrt(weights @ np.sum((means - centroid) ** 2, axis=1) / weights.sum()))
+    means = np.asarray(moving.means_)
+    _, radius = centroid_and_radius(moving)
     rotation, translation, iterations, seconds, registration = np.eye(3), np.zeros(3), 0, 0.0, None
     for scale in scales:
         for _ in range(int(rounds)):
