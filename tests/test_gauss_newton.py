@@ -124,6 +124,35 @@ def test_gauss_newton_steps_where_the_hessian_is_not_positive_definite():
     assert result.converged and cost.error(result)[0] < 1e-8
 
 
+def test_a_short_full_newton_step_ends_the_solve_without_derivatives_at_its_pose():
+    """Newton's steps here shrink 0.15 → 1.1e-3 → 1.4e-9 (quadratic convergence). With ``tol = 1e-3`` the step of
+    1.1e-3 is followed by one far below ``tol`` (``κ s² = 100 × 1.2e-6 < tol``): the solver stops on its pose, with
+    no derivatives there (4 evaluations of them for 4 steps), within 1.5e-9 of the true pose. A solver that asks
+    for the derivatives at the last pose to see that the next step is short evaluates them 5 times."""
+    cost = PointCost()
+    derivative_calls = []
+
+    def counted(gradient, gauss_newton, exact):
+        derivative_calls.append(1)
+        return gradient, gauss_newton, exact
+
+    result = cost.solve(hessians=counted, options={"tol": 1e-3})
+    assert result.converged and result.iterations == 4 and len(derivative_calls) == 4
+    assert cost.error(result)[0] < 1e-8
+
+
+def test_short_steps_of_a_linearly_converging_solve_do_not_end_it():
+    """Gauss-Newton steps (no exact Hessian) with a matrix 1.5 times too large go two thirds of the way each time
+    (the full step is kept: stretched twice it overshoots as far): convergence is linear, each step twice the
+    distance still to go. The quadratic stopping rule does not apply to them; applied, it stops at a step of 1e-5
+    with 5e-6 still to go, where the tolerance is 1e-8 (tried)."""
+    cost = PointCost()
+    result = cost.solve(hessians=lambda g, gauss_newton, exact: (g, 1.5 * gauss_newton, None),
+                        options={"max_iter": 100})
+    angle, translation = cost.error(result)
+    assert result.converged and angle < 1e-8 and translation < 1e-8 * cost.radius
+
+
 def test_damping_grows_until_a_step_lowers_the_cost():
     """A Gauss-Newton matrix 1e4 times too small (and no exact Hessian) makes every first step 1e4 times too long;
     three backtracks shorten it 1000-fold at most, so only a growing damping λ (x10 per failed search) makes the

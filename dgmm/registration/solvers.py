@@ -107,6 +107,12 @@ _GAUSS_NEWTON_DEFAULTS = {"max_iter": 100, "tol": 1e-8, "damping": 1e-4, "max_st
 _MIN_DAMPING, _MAX_DAMPING = 1e-12, 1e12
 _STRETCH = (2.0, 4.0, 8.0)
 _BACKTRACKS = 3
+_NEWTON_CONTRACTION = 100.0
+"""Near the optimum Newton's steps shrink quadratically, ``|s_{k+1}| ≈ κ |s_k|²`` (scaled as the stopping test):
+fr1/xyz's odometry registrations (250 frames, 1,241 pairs of a full Newton step and the step after it) have κ a median
+4.6, 90th percentile 48 and 99th 175. After a full Newton step with ``κ |s|² < tol`` for this κ the next step would
+be below ``tol``, and Gauss-Newton stops without the derivatives at the new pose (of the 514 such steps there, one
+was followed by a step above ``tol = 1e-4``: 1.4e-4)."""
 
 
 def pose_derivatives(rotated, gradient, *weights):
@@ -183,8 +189,10 @@ def minimise_gauss_newton(method, evaluate, centre, length, rotation, translatio
     callback : callable or None
         ``callback(iteration, registration)`` after every kept step.
     options : dict or None
-        ``max_iter`` (100), ``tol`` (1e-8), ``damping`` (initial λ, 1e-4), ``max_step`` (0.3: no step turns by
-        more radians or moves by more RMS radii; longer Newton steps from far away jump to other basins).
+        ``max_iter`` (100), ``tol`` (1e-8: converged once the next step would turn by less, in radians, and move
+        by less, in ``length`` units: a step computed below it, or a full Newton step ``s`` with
+        ``κ |s|² < tol``, :data:`_NEWTON_CONTRACTION`), ``damping`` (initial λ, 1e-4), ``max_step`` (0.3: no step
+        turns by more radians or moves by more RMS radii; longer Newton steps from far away jump to other basins).
 
     Returns
     -------
@@ -227,8 +235,9 @@ def minimise_gauss_newton(method, evaluate, centre, length, rotation, translatio
                 break
             damping *= 10.0
         if found is not None:
-            rotation, translation, cost, derivatives = found
+            rotation, translation, cost, derivatives, full = found
             damping = max(damping / 10.0, _MIN_DAMPING)
+            converged = newton and full and _NEWTON_CONTRACTION * np.max(np.abs(step) / scale) ** 2 < tol
         elif not converged:
             break
         if callback is not None:
@@ -240,12 +249,14 @@ def _line_search(evaluate, rotation, translation, cost, slope, step, scale, max_
     """The first pose along ``step`` that lowers the cost: the full step, else up to 3 shorter ones (the minimum
     of the parabola through the cost, its slope and the last trial, kept within 0.1–0.5 of it). With ``stretch``
     (Gauss-Newton steps, which fall short far from the optimum like EM steps) a full step that lowers the cost is
-    stretched 2, 4, 8 times while the cost keeps falling. Returns ``(rotation, translation, cost, derivatives)``,
-    or None."""
+    stretched 2, 4, 8 times while the cost keeps falling. Returns ``(rotation, translation, cost, derivatives,
+    full)``, ``full`` whether the pose is the whole step uncapped, or None."""
     def at(length):
-        move = _capped(length * step, scale, max_step)
+        wanted = length * step
+        move = _capped(wanted, scale, max_step)
         new_rotation, new_translation = exp_rotation(move[3:]) @ rotation, translation + move[:3]
-        return (new_rotation, new_translation, *evaluate(new_rotation, new_translation))
+        return (new_rotation, new_translation, *evaluate(new_rotation, new_translation),
+                length == 1.0 and move is wanted)
 
     found, length = at(1.0), 1.0
     for _ in range(_BACKTRACKS):
