@@ -195,17 +195,6 @@ def _component_coefficients(weights, means, precisions_cholesky, unit=1.0):
 # E-step, M-step
 # ---------------------------------------------------------------------------------------------------------
 
-def _log_rho(features, params, unit=1.0):
-    """Weighted log-probabilities ``log rho``, shape (n_components, n_rows), one column per primitive (EM's
-    layout, :func:`_e_step_block`).
-
-    A view of the (n_rows, n_components) product: BLAS computes each of its rows the same whatever the other rows,
-    which the (n_components, n_rows) product's edge cases do not, so scores do not depend on how the primitives
-    are split.
-    """
-    return np.dot(features, _component_coefficients(*params, unit=unit).T).T
-
-
 def _exp_shifted_in_place(log_rho):
     """Replace ``log rho`` by ``exp(max(log rho − peak, floor))`` in place; return ``peak`` and the column sums,
     both (n_rows,)."""
@@ -245,19 +234,44 @@ def _e_step_block(table, scale, coefficients, rows, out):
     return rho, total, peak + np.log(total)
 
 
-def _log_rho_blocks(prims, weights, means, covariances, precisions_cholesky, scale=1.0):
-    """``log rho`` of a mixture given in data units, block by block over ``prims`` (cache-sized blocks of
-    ``_SCORE_BLOCK_BYTES``), computed in the mixture's own internal units (module docstring), with the E-step
-    ``scale`` on each primitive's expected log-density (a float, or one per primitive)."""
-    centre = weights @ means
-    unit, _ = _unit(means - centre, covariances, weights)
-    params = (weights, (means - centre) / unit, precisions_cholesky * unit)
-    scale = np.broadcast_to(np.asarray(scale, dtype=float), (len(prims),))
-    rows = max(1, _SCORE_BLOCK_BYTES // (8 * len(weights)))
-    for start in range(0, len(prims), rows):
-        block = slice(start, start + rows)
-        features = _moment_features(prims.means[block], prims.covariances[block], centre, scale[block], unit)
-        yield _log_rho(features, params, unit=unit)
+class EStep:
+    """EM's E-step under one mixture given in data units, set up once (its internal units, module docstring, and
+    its coefficient table) for any number of calls on any primitives.
+
+    Parameters
+    ----------
+    weights, means, covariances, precisions_cholesky : ndarrays of shape (K,), (K, 3), (K, 3, 3), (K, 3, 3)
+        In data units (a fitted mixture's attributes, or its ``e_step_params_``).
+    """
+
+    def __init__(self, weights, means, covariances, precisions_cholesky):
+        self.centre = weights @ means
+        self.unit, _ = _unit(means - self.centre, covariances, weights)
+        self.coefficients = _component_coefficients(weights, (means - self.centre) / self.unit,
+                                                    precisions_cholesky * self.unit, unit=self.unit)
+
+    def log_rho_blocks(self, means, covariances, scale=1.0):
+        """``log rho`` of the primitives ``(means, covariances)``, shape (n_components, n_rows) per cache-sized
+        block of ``_SCORE_BLOCK_BYTES``, with the E-step ``scale`` on each primitive's expected log-density (a
+        float, or one per primitive).
+
+        Each block is a view of the (n_rows, n_components) product: BLAS computes each of its rows the same whatever
+        the other rows, which the (n_components, n_rows) product's edge cases do not, so scores do not depend on how
+        the primitives are split.
+        """
+        scale = np.broadcast_to(np.asarray(scale, dtype=float), (len(means),))
+        rows = max(1, _SCORE_BLOCK_BYTES // (8 * len(self.coefficients)))
+        for start in range(0, len(means), rows):
+            block = slice(start, start + rows)
+            features = _moment_features(means[block], covariances[block], self.centre, scale[block], self.unit)
+            yield np.dot(features, self.coefficients.T).T
+
+    def responsibilities(self, means, covariances, scale=1.0):
+        """Responsibilities of the primitives ``(means, covariances)``, shape (n_rows, n_components)."""
+        blocks = list(self.log_rho_blocks(means, covariances, scale))
+        for block in blocks:
+            _normalise_in_place(block)
+        return np.ascontiguousarray(np.concatenate(blocks, axis=1).T)
 
 
 def responsibilities(prims, weights, means, covariances, precisions_cholesky, scale=1.0):
@@ -272,10 +286,8 @@ def responsibilities(prims, weights, means, covariances, precisions_cholesky, sc
         The E-step's factor on each primitive's expected log-density (a variant's, :mod:`dgmm.variants`; 1 is
         the textbook E-step).
     """
-    blocks = list(_log_rho_blocks(prims, weights, means, covariances, precisions_cholesky, scale))
-    for block in blocks:
-        _normalise_in_place(block)
-    return np.ascontiguousarray(np.concatenate(blocks, axis=1).T)
+    return EStep(weights, means, covariances, precisions_cholesky).responsibilities(prims.means, prims.covariances,
+                                                                                    scale)
 
 
 def _m_step_sums(resp, moments, row_weights):
@@ -594,7 +606,8 @@ class GaussianMixture(BaseEstimator):
     def _log_rho_blocks(self, prims):
         """``log rho`` of the fitted mixture (textbook E-step), block by block over the primitives."""
         self._check_fitted()
-        return _log_rho_blocks(prims, self.weights_, self.means_, self.covariances_, self.precisions_cholesky_)
+        return EStep(self.weights_, self.means_, self.covariances_,
+                     self.precisions_cholesky_).log_rho_blocks(prims.means, prims.covariances)
 
     def _log_norm(self, prims):
         log_norm = np.concatenate([_log_normaliser(block) for block in self._log_rho_blocks(prims)])

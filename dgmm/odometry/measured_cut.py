@@ -12,12 +12,12 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
-from dgmm.mixture import responsibilities
+from dgmm.mixture import EStep
 from dgmm.odometry.overlap import centroid_and_radius
-from dgmm.primitives import Primitives
 from dgmm.registration import register_d2d, rotation_distance_deg
 from dgmm.variants import VARIANTS
 
@@ -59,6 +59,16 @@ class MeasuredFrame:
         if name.endswith("_") and not name.startswith("_"):
             return getattr(self.mixture, name)
         raise AttributeError(name)
+
+    @cached_property
+    def last_e_step(self):
+        """The E-step of the fit's last M-step (under ``mixture.e_step_params_``), set up once for every cut."""
+        return EStep(*self.mixture.e_step_params_)
+
+    @cached_property
+    def variant_weights(self):
+        """The variant's E-step scale and M-step weight of every primitive (:data:`dgmm.variants.VARIANTS`)."""
+        return VARIANTS[self.variant](self.primitives.weights)
 
 
 def seen_by(points, frame):
@@ -121,14 +131,14 @@ def cut(frame, unseen):
     weights, means = mixture.weights_, mixture.means_
     regulariser = mixture.reg_covar * np.eye(3)  # the M-step adds it to every covariance: the moments are without
     covariances = mixture.covariances_ - regulariser
-    scale, mstep_weights = VARIANTS[frame.variant](prims.weights)
+    scale, mstep_weights = frame.variant_weights
     mass = weights * mstep_weights.sum()
-    if not unseen.any():
+    rows = np.flatnonzero(unseen)
+    if not len(rows):
         return weights, means, mixture.covariances_
-    points, prim_covariances = prims.means[unseen], prims.covariances[unseen]
-    resp = responsibilities(Primitives(points, prim_covariances, prims.weights[unseen]), *mixture.e_step_params_,
-                            scale=scale[unseen])
-    resp *= mstep_weights[unseen, None]
+    points, prim_covariances = prims.means[rows], prims.covariances[rows]
+    resp = frame.last_e_step.responsibilities(points, prim_covariances, scale[rows])
+    resp *= mstep_weights[rows, None]
     lost = resp.sum(axis=0)
     # The sums about each component's mean from sums about one centre c (matrix products over the primitives):
     # Σ r (x - μ) = s - m d and Σ r (x - μ)(x - μ)ᵀ = S - s dᵀ - d sᵀ + m d dᵀ, with y = x - c, d = μ - c.
