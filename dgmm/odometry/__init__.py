@@ -3,6 +3,7 @@
 The public namespace; one concept per module:
 
 - :mod:`~dgmm.odometry.tum`: TUM RGB-D files (depth PNGs, trajectories, sequences) and timestamp association;
+- :mod:`~dgmm.odometry.depth_png`: fast decoding of TUM's 16-bit depth PNGs (ISA-L's inflate, PIL for the rest);
 - :mod:`~dgmm.odometry.pixels`: camera intrinsics, back-projection and pixel-rectangle primitives;
 - :mod:`~dgmm.odometry.frame_model`: each method's per-frame model (a GMM, or ICP's points), the per-frame
   schedules of the GMMs (EM start, EM iterations, D2D solver) and the registration of two frames;

@@ -10,6 +10,7 @@
 """
 from __future__ import annotations
 
+import io
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -18,6 +19,7 @@ from PIL import Image, UnidentifiedImageError
 
 from dgmm.errors import DataError, InputError
 from dgmm.files import atomic_open
+from dgmm.odometry.depth_png import decode_gray16
 from dgmm.registration import matrix_to_quaternion, quaternion_to_matrix
 
 DEPTH_SCALE = 5000.0
@@ -179,14 +181,17 @@ def read_depth(path):
         The file is missing, not an image, or not 16-bit single-channel.
     """
     try:
-        with Image.open(path) as image:
-            mode = image.mode
-            raw = np.asarray(image)
+        data = Path(path).read_bytes()
+        raw = decode_gray16(data, str(path))  # TUM's own frames, fast; others through PIL
+        if raw is None:
+            with Image.open(io.BytesIO(data)) as image:
+                mode = image.mode
+                raw = np.asarray(image)
+            if mode not in ("I;16", "I;16B", "I") or raw.ndim != 2:
+                raise DataError(f"{path}: not a 16-bit single-channel depth PNG (mode {mode})")
     except (OSError, UnidentifiedImageError, ValueError) as exc:
         raise DataError(f"{path}: cannot read depth PNG ({type(exc).__name__}: {exc})") from None
-    if mode not in ("I;16", "I;16B", "I") or raw.ndim != 2:
-        raise DataError(f"{path}: not a 16-bit single-channel depth PNG (mode {mode})")
-    return raw.astype(np.float64) / DEPTH_SCALE
+    return np.true_divide(raw, DEPTH_SCALE, dtype=np.float64)
 
 
 def write_depth(path, depth):
