@@ -133,7 +133,7 @@ def _unit(deviations, covariances, weights):
         return 1.0, 0.0
     _, exponent = np.frexp(peak)  # squares of values scaled by 2**-exponent neither overflow nor underflow
     squares = (np.ldexp(deviations, -exponent) ** 2).sum(axis=1)
-    squares += np.trace(np.ldexp(covariances, -2 * exponent), axis1=1, axis2=2)
+    squares += np.ldexp(np.diagonal(covariances, axis1=1, axis2=2), -2 * exponent).sum(axis=1)  # the traces
     radius = np.ldexp(np.sqrt(np.average(squares, weights=weights)), exponent)
     return np.ldexp(1.0, np.frexp(radius)[1] - 1), radius
 
@@ -151,9 +151,8 @@ def _moment_features(means, covariances, centre, scale, unit=1.0):
     ``(x − centre) / unit``, computed without forming the data-unit second moments (which overflow at 1e155).
     """
     means = (means - centre) / unit
-    second = covariances / unit**2 + means[:, :, None] * means[:, None, :]
     features = np.empty((len(means), 11))
-    features[:, :6] = second[:, _ROWS, _COLS]
+    features[:, :6] = covariances[:, _ROWS, _COLS] / unit**2 + means[:, _ROWS] * means[:, _COLS]
     features[:, 3:6] *= 2.0
     features[:, 6:9] = means
     features[:, 9] = 1.0
