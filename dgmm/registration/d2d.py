@@ -14,7 +14,7 @@ from functools import partial
 import numpy as np
 
 from dgmm.registration.fitted import EXP_FLOOR, FULL_INDEX as _FULL, FittedMixture, quadratic_features
-from dgmm.registration.pose import params_from_pose
+from dgmm.registration.pose import params_from_pose, pivot_pose
 from dgmm.registration.rotations import LEVI_CIVITA, rotation_and_jacobian
 from dgmm.registration.solvers import (TRANSLATION_UNIT, check_solver, minimise_bfgs, minimise_gauss_newton,
                                        pose_matrices)
@@ -269,12 +269,12 @@ def register_d2d(fixed, moving, initial_rotation=None, initial_translation=None,
     moving_mix = FittedMixture.from_fitted("moving", moving)
     centre = moving_mix.centroid
     tables = PairTables.of(fixed_mix, moving_mix, centre)
-    x0 = params_from_pose(np.eye(3) if initial_rotation is None else initial_rotation,
-                          np.zeros(3) if initial_translation is None else initial_translation, centre)
+    rotation = np.eye(3) if initial_rotation is None else initial_rotation
+    translation = np.zeros(3) if initial_translation is None else initial_translation
     radius = np.sqrt(moving_mix.weights @ np.sum((moving_mix.means - centre) ** 2, axis=1))
-    if solver == "gauss-newton":
-        rotation = initial_rotation if initial_rotation is not None else np.eye(3)
+    if solver == "gauss-newton":  # on the pose itself: no quaternion
         return minimise_gauss_newton("d2d", d2d_pose_cost(tables), centre, radius,
-                                     np.asarray(rotation, dtype=np.float64), x0[:3], callback, options)
-    cost = partial(d2d_cost, tables=tables)
-    return minimise_bfgs("d2d", cost, centre, TRANSLATION_UNIT * radius, x0, gradient, callback, options)
+                                     *pivot_pose(rotation, translation, centre), callback, options)
+    x0 = params_from_pose(rotation, translation, centre)
+    return minimise_bfgs("d2d", partial(d2d_cost, tables=tables), centre, TRANSLATION_UNIT * radius, x0, gradient,
+                         callback, options)

@@ -71,9 +71,15 @@ def pose_from_params(params, centre):
     return rotation, params[:3] + centre - rotation @ centre
 
 
-def params_from_pose(rotation, translation, centre):
-    """The optimiser's 7-vector ``(t', q)`` of the global pose ``(R, t)`` rotating about ``centre``."""
+def pivot_pose(rotation, translation, centre):
+    """The global pose ``(R, t)`` checked, as ``(R, t')`` rotating about ``centre``: ``x -> R (x - c) + c + t'``."""
     rotation = as_array("initial rotation", rotation, (3, 3))
     translation = as_array("initial translation", translation, (3,))
-    return np.concatenate([translation - centre + rotation @ centre, matrix_to_quaternion(rotation)])
+    return rotation, translation - centre + rotation @ centre
+
+
+def params_from_pose(rotation, translation, centre):
+    """The optimiser's 7-vector ``(t', q)`` of the global pose ``(R, t)`` rotating about ``centre``."""
+    rotation, pivot = pivot_pose(rotation, translation, centre)
+    return np.concatenate([pivot, matrix_to_quaternion(rotation)])
 
