@@ -18,7 +18,7 @@ import numpy as np
 
 from dgmm.mixture import EStep
 from dgmm.odometry.overlap import centroid_and_radius
-from dgmm.registration import register_d2d, rotation_distance_deg
+from dgmm.registration import register_d2d
 from dgmm.variants import VARIANTS
 
 _MIN_MASS = 1e-3
@@ -246,6 +246,10 @@ def register_cut_rounds(fixed, moving, first, rounds, tol, solver="gauss-newton"
 
 def pose_change(first, second, centroid, radius):
     """How far apart two poses ``x -> R x + t`` are: the larger of the distance between the images of ``centroid``
-    in ``radius`` units and the angle of ``R_2 R_1ᵀ`` in radians (Gauss-Newton's stopping measure, between poses)."""
+    in ``radius`` units and the angle of ``R_2 R_1ᵀ`` in radians (Gauss-Newton's stopping measure, between poses).
+
+    The angle ``θ`` from the chord ``|R_2 - R_1|_F = 2√2 sin(θ / 2)``: exact for rotations and accurate at small
+    angles, without scipy's conversion (0.3 ms a call)."""
     shift = second.rotation @ centroid + second.translation - first.rotation @ centroid - first.translation
-    return max(np.linalg.norm(shift) / radius, np.radians(rotation_distance_deg(second.rotation, first.rotation)))
+    chord = np.linalg.norm(second.rotation - first.rotation) / (2.0 * np.sqrt(2.0))
+    return max(np.linalg.norm(shift) / radius, 2.0 * np.arcsin(min(chord, 1.0)))
