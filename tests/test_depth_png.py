@@ -1,5 +1,6 @@
-"""The fast 16-bit PNG decoder (``dgmm.odometry.depth_png``) against PIL's, on TUM's own frames and on PNGs built
-here byte by byte (row filters chosen, chunks and CRCs written with zlib), and its errors."""
+"""The fast 16-bit PNG reader and writer (``dgmm.odometry.depth_png``) against PIL, on TUM's own frames and on PNGs
+built here byte by byte (row filters chosen, chunks and CRCs written with zlib), and the reader's errors."""
+import io
 import struct
 import zlib
 
@@ -9,8 +10,8 @@ from PIL import Image
 
 from conftest import SHARED_DATA
 from dgmm.errors import DataError
-from dgmm.odometry.depth_png import decode_gray16
-from dgmm.odometry.tum import DEPTH_SCALE, read_depth, write_depth
+from dgmm.odometry.depth_png import decode_gray16, encode_gray16
+from dgmm.odometry.tum import DEPTH_SCALE, read_depth
 
 FR1_DEPTH = SHARED_DATA / "tum" / "rgbd_dataset_freiburg1_xyz" / "depth"
 
@@ -64,15 +65,27 @@ def test_none_and_sub_rows_with_carries_across_bytes(tmp_path):
 
 def test_other_pngs_are_left_to_pil(tmp_path):
     """Up rows, 8-bit pixels: not the fast path's (None), and read_depth decodes them through PIL, as PIL's own
-    adaptive filters (which write_depth uses) are."""
+    adaptive filters are."""
     pixels = np.random.default_rng(1).integers(0, 65536, size=(6, 5)).astype(np.uint16)
     assert decode_gray16(png(pixels, [1, 2, 1, 1, 1, 1])) is None
     (tmp_path / "up.png").write_bytes(png(pixels, [1, 2, 1, 1, 1, 1]))
     np.testing.assert_array_equal(read_depth(tmp_path / "up.png"), pixels / DEPTH_SCALE)
     assert decode_gray16(png(pixels.astype(np.uint8), [1] * 6, bit_depth=8)) is None
-    depth = np.random.default_rng(2).uniform(0.5, 4.0, size=(48, 64))
-    write_depth(tmp_path / "pil.png", depth)
-    np.testing.assert_array_equal(read_depth(tmp_path / "pil.png"), pil_pixels(tmp_path / "pil.png") / DEPTH_SCALE)
+    smooth = np.add.outer(np.arange(48), np.arange(64)).astype(np.uint16) * 700  # PIL writes Up and Paeth rows
+    Image.fromarray(smooth).save(tmp_path / "pil.png")
+    assert decode_gray16((tmp_path / "pil.png").read_bytes()) is None
+    np.testing.assert_array_equal(read_depth(tmp_path / "pil.png"), smooth / DEPTH_SCALE)
+
+
+def test_written_depth_is_read_back_by_pil_and_fast():
+    """encode_gray16 (write_depth's) of random 16-bit pixels: PIL, an independent decoder, reads the same pixels,
+    and so does decode_gray16 (its fast path: the rows are Sub-filtered)."""
+    pixels = np.random.default_rng(3).integers(0, 65536, size=(9, 11)).astype(np.uint16)
+    data = encode_gray16(pixels)
+    with Image.open(io.BytesIO(data)) as image:
+        assert image.mode == "I;16"
+        np.testing.assert_array_equal(np.asarray(image), pixels)
+    np.testing.assert_array_equal(decode_gray16(data), pixels)
 
 
 def test_corrupt_pngs_are_data_errors_naming_the_file(tmp_path):

@@ -1,10 +1,11 @@
-"""Decoding 16-bit grayscale PNGs (TUM depth frames) fast: ISA-L's inflate and numpy's unfiltering.
+"""Reading and writing 16-bit grayscale PNGs (TUM depth frames) fast: ISA-L's deflate and numpy's row filters.
 
 A TUM depth frame is a 640x480 16-bit PNG whose rows are all Sub-filtered. PIL decodes one in about 3.6 ms, 2.7 of
 them zlib's inflate; ISA-L (``isal``) inflates the same stream in 0.8 ms, and undoing the Sub filter is a running sum
 of each row's bytes modulo 256, two bytes a pixel apart: 1.2 ms in all (fr1/xyz, one thread). :func:`decode_gray16`
 takes the PNGs this covers, non-interlaced 16-bit grayscale with None- or Sub-filtered rows, and leaves every other
 PNG (other bit depths or colour types, interlacing, Up, Average or Paeth rows, as PIL itself writes) to PIL.
+:func:`encode_gray16` writes what it reads fast: every row Sub-filtered, deflated by ISA-L.
 """
 from __future__ import annotations
 
@@ -77,3 +78,35 @@ def decode_gray16(data, name="PNG"):
     if none.any():
         pixels[none] = filtered[none]
     return pixels.view(">u2")[:, :, 0]
+
+
+def encode_gray16(pixels):
+    """A PNG file's bytes of 16-bit grayscale pixels: every row Sub-filtered (each byte less the same byte of the
+    pixel to its left, modulo 256), deflated by ISA-L at its fastest level; :func:`decode_gray16` reads it back.
+
+    Parameters
+    ----------
+    pixels : array-like of uint16, shape (height, width)
+
+    Returns
+    -------
+    data : bytes
+    """
+    pixels = np.asarray(pixels)
+    if pixels.ndim != 2 or pixels.dtype.kind != "u" or pixels.dtype.itemsize != 2:
+        raise ValueError(f"encode_gray16 takes a 2-D uint16 array, got {pixels.dtype} of shape {pixels.shape}")
+    height, width = pixels.shape
+    data = pixels.astype(">u2").view(np.uint8).reshape(height, width, 2)
+    rows = np.empty((height, 1 + 2 * width), dtype=np.uint8)
+    rows[:, 0] = _SUB
+    filtered = rows[:, 1:].reshape(height, width, 2)
+    filtered[:, 0] = data[:, 0]
+    np.subtract(data[:, 1:], data[:, :-1], out=filtered[:, 1:])  # uint8: modulo 256
+    header = struct.pack(">IIBBBBB", width, height, 16, 0, 0, 0, 0)
+    return (_SIGNATURE + _chunk(b"IHDR", header) + _chunk(b"IDAT", isal_zlib.compress(rows.tobytes(), level=1))
+            + _chunk(b"IEND", b""))
+
+
+def _chunk(kind, body):
+    """A PNG chunk: length, type, data and the CRC of type and data."""
+    return struct.pack(">I", len(body)) + kind + body + struct.pack(">I", isal_zlib.crc32(body, isal_zlib.crc32(kind)))
