@@ -319,6 +319,17 @@ def test_predict_proba_and_primitive_bounds_equal_scipy(bunny_res4):
         np.testing.assert_array_equal(gmm.predict(data), log_rho.argmax(axis=1))
 
 
+def test_predict_proba_over_several_blocks_equals_scipy(bunny_res4):
+    """5,000 points at K=150 are scored in several blocks of ``_SCORE_BLOCK_BYTES`` (873 rows each): every block's
+    responsibilities must be its own points' (a mix-up of blocks fails; tried), against scipy's densities."""
+    points = trimesh.sample.sample_surface(bunny_res4, 5000, seed=4)[0]
+    gmm = GaussianMixture(150, max_iter=3, random_state=0).fit(points)
+    assert len(points) > 5 * dgmm.mixture._SCORE_BLOCK_BYTES // (8 * 150)
+    log_rho = component_log_densities(gmm, points)
+    expected = np.exp(log_rho - logsumexp(log_rho, axis=1)[:, None])
+    np.testing.assert_allclose(gmm.predict_proba(points), expected, rtol=0, atol=1e-9)
+
+
 def test_saved_model_loads_back_bit_identical(bunny_res4, tmp_path):
     """save_model / load_model: the same parameters to the bit, the same scores, the stored description."""
     from dgmm.model_io import load_model, save_model
