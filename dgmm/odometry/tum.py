@@ -10,7 +10,6 @@
 """
 from __future__ import annotations
 
-import io
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -183,8 +182,8 @@ def read_depth(path):
     try:
         data = Path(path).read_bytes()
         raw = decode_gray16(data, str(path))  # TUM's own frames, fast; others through PIL
-        if raw is None:
-            with Image.open(io.BytesIO(data)) as image:
+        if raw is None:  # read again by PIL, whose errors name the file
+            with Image.open(path) as image:
                 mode = image.mode
                 raw = np.asarray(image)
             if mode not in ("I;16", "I;16B", "I") or raw.ndim != 2:
