@@ -49,7 +49,7 @@ def decode_gray16(data, name="PNG"):
         if end + 4 > len(data):
             raise DataError(f"{name}: corrupt PNG (chunk {kind!r} truncated)")
         body, (crc,) = data[position + 8:end], struct.unpack(">I", data[end:end + 4])
-        if isal_zlib.crc32(body, isal_zlib.crc32(kind)) != crc:
+        if _crc(kind, body) != crc:
             raise DataError(f"{name}: corrupt PNG (chunk {kind!r}: its CRC does not match)")
         if kind == b"IHDR":
             header = struct.unpack(">IIBBBBB", body)
@@ -108,5 +108,10 @@ def encode_gray16(pixels):
 
 
 def _chunk(kind, body):
-    """A PNG chunk: length, type, data and the CRC of type and data."""
-    return struct.pack(">I", len(body)) + kind + body + struct.pack(">I", isal_zlib.crc32(body, isal_zlib.crc32(kind)))
+    """A PNG chunk: length, type, data and their CRC."""
+    return struct.pack(">I", len(body)) + kind + body + struct.pack(">I", _crc(kind, body))
+
+
+def _crc(kind, body):
+    """The CRC-32 of a chunk's type and data, as PNG stores it after them."""
+    return isal_zlib.crc32(body, isal_zlib.crc32(kind))
