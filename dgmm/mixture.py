@@ -218,17 +218,24 @@ def _log_normaliser(log_rho):
     return peak + np.log(total)
 
 
-def _e_step_block(table, scale, coefficients, rows, out):
+def _scaled_table(table, scale):
+    """The moment table with the E-step ``scale`` (n_rows,) on its columns 0–9, made once per fit: the table
+    itself when every scale is 1 (textbook EM)."""
+    if np.all(scale == 1.0):
+        return table
+    scaled = table.copy()
+    scaled[:, :10] *= scale[:, None]
+    return scaled
+
+
+def _e_step_block(features, coefficients, rows, out):
     """The E-step of the primitives ``rows``: ``rho / max_i rho`` (in ``out``, (n_components, n_rows)), each
     primitive's sum of it, and its log-normaliser.
 
     Responsibilities are ``rho`` over that sum; the M-step divides its weights by the sums instead of dividing
-    every responsibility. ``table`` is the unscaled moment table; its columns 0–9 are multiplied by the E-step
-    ``scale`` here.
+    every responsibility. ``features`` is the moment table with the E-step scale (:func:`_scaled_table`).
     """
-    features = table[rows].copy()
-    features[:, :10] *= scale[rows, None]
-    rho = np.dot(coefficients, features.T, out=out)  # the E-step's per-primitive passes run down its rows
+    rho = np.dot(coefficients, features[rows].T, out=out)  # the E-step's per-primitive passes run down its rows
     peak, total = _exp_shifted_in_place(rho)
     return rho, total, peak + np.log(total)
 
@@ -545,6 +552,7 @@ class GaussianMixture(BaseEstimator):
         scale, mstep_weights = VARIANTS[self.variant](prims.weights)
         centre, unit = self._frame(prims, mstep_weights)
         table = _moment_table(prims, centre, unit)
+        features = _scaled_table(table, scale)
         reg_covar = self.reg_covar / unit**2
         rng = np.random.default_rng(self.random_state)
         log_norm = np.empty(len(prims))
@@ -555,7 +563,7 @@ class GaussianMixture(BaseEstimator):
             coefficients = _component_coefficients(*params, unit=unit)
 
             def block(rows, out):
-                rho, total, log_norm[rows] = _e_step_block(table, scale, coefficients, rows, out)
+                rho, total, log_norm[rows] = _e_step_block(features, coefficients, rows, out)
                 return _m_step_sums(rho, table[rows, :10], mstep_weights[rows] / total)
             sums = blocks.run(block)
             return sums, np.dot(mstep_weights, log_norm) / mstep_weights.sum()

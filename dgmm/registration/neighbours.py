@@ -31,7 +31,7 @@ class TrackedNeighbours:
     def _anchor(self, queries, rows):
         """Anchor ``queries[rows]``: candidates from a tree query, and their radius (infinite if every point is one)."""
         distances, indices = self.tree.query(queries[rows], k=self.ranks)
-        self.anchors[rows], self.candidates[:, rows] = queries[rows], indices.T
+        self.anchors[:, rows], self.candidates[:, rows] = queries[rows].T, indices.T
         self.candidate_points[:, :, rows] = self.points[indices].transpose(2, 1, 0)
         self.radius[rows] = distances[:, -1] if len(self.ranks) < len(self.points) else np.inf
         return distances, indices
@@ -50,19 +50,22 @@ class TrackedNeighbours:
         indices : ndarray of shape (n_queries,)
             Where two points are equally near (to rounding), the one ``cKDTree.query`` picks.
         """
+        coordinates = queries.T  # coordinate-major: contiguous when the caller keeps its points so (ICP does)
         if self.anchors is None:  # candidates and their coordinates rank-major, so reductions run along rows
             n_queries, n_ranks = len(queries), len(self.ranks)
-            self.anchors, self.radius = np.empty((n_queries, 3)), np.empty(n_queries)
+            self.anchors, self.radius = np.empty((3, n_queries)), np.empty(n_queries)
             self.candidates = np.empty((n_ranks, n_queries), dtype=np.intp)
             self.candidate_points = np.empty((3, n_ranks, n_queries))
             self._anchor(queries, slice(None))
-        offsets = self.candidate_points - queries.T[:, None, :]
+        offsets = self.candidate_points - coordinates[:, None, :]
         squared = np.einsum("dkq,dkq->kq", offsets, offsets)
-        best = squared.argmin(axis=0)
-        rows = np.arange(len(queries))
-        distances, indices = np.sqrt(squared[best, rows]), self.candidates[best, rows]
-        moves = queries - self.anchors
-        drift = np.sqrt(np.einsum("qd,qd->q", moves, moves))
+        nearest = squared.min(axis=0)
+        best = np.empty(len(nearest), dtype=np.intp)  # the first rank at the minimum (argmin), a pass per rank
+        for rank in range(len(squared) - 1, -1, -1):
+            best[squared[rank] == nearest] = rank
+        distances, indices = np.sqrt(nearest), self.candidates[best, np.arange(len(nearest))]
+        moves = coordinates - self.anchors
+        drift = np.sqrt(np.einsum("dq,dq->q", moves, moves))
         margin = 1e-9 * (np.abs(queries).max() + self.scale)  # far above the distances' rounding
         unproven = distances >= self.radius - drift - margin  # a point off the candidates may be nearer
         tied = np.count_nonzero(squared <= (distances + margin) ** 2, axis=0) > 1

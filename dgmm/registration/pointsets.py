@@ -33,13 +33,14 @@ def kabsch(source, target, weights=None):
     w = np.ones(len(source)) if weights is None else as_array("weights", weights, (len(source),))
     if np.any(w < 0) or w.sum() <= 0:
         raise InputError("weights must be non-negative and not all zero")
-    return _kabsch(source, target, w / w.sum())
+    return _kabsch(source.T, target.T, w / w.sum())
 
 
 def _kabsch(source, target, weights):
-    """:func:`kabsch` on checked arrays, ``weights`` summing to one (ICP's inner loop calls it directly)."""
-    source_mean, target_mean = weights @ source, weights @ target
-    cross = (source - source_mean).T @ ((target - target_mean) * weights[:, None])
+    """:func:`kabsch` of coordinate-major ``(3, n)`` points (ICP keeps its points so: its sums then run along
+    rows), ``weights`` summing to one."""
+    source_mean, target_mean = source @ weights, target @ weights
+    cross = (source - source_mean[:, None]) @ ((target - target_mean[:, None]) * weights).T
     u, _, vt = np.linalg.svd(cross)
     rotation = vt.T @ np.diag([1.0, 1.0, np.sign(np.linalg.det(vt.T @ u.T))]) @ u.T
     return rotation, target_mean - rotation @ source_mean
@@ -76,30 +77,32 @@ def register_icp(source, target, max_iter=50_000, tol=1e-9, callback=None):
     # The moved point nearest to a target point p is the source point nearest to Rᵀ(p − t), at the same distance:
     # both sides' points stay fixed, and the queries move a little per step.
     forward, back = TrackedNeighbours(target), TrackedNeighbours(source)
-    n_source = len(source)
-    back_weight = n_source / len(target)
-    weights = np.concatenate([np.ones(n_source), np.full(len(target), back_weight)])
+    n_source, n_target = len(source), len(target)
+    back_weight = n_source / n_target
+    weights = np.concatenate([np.ones(n_source), np.full(n_target, back_weight)])
     weights /= weights.sum()
-    # The pooled pairs (moved, matched target) then (matched moved, target), refilled in place every iteration.
-    pooled_source, pooled_target = np.empty((n_source + len(target), 3)), np.empty((n_source + len(target), 3))
-    pooled_target[n_source:] = target
+    # Points coordinate-major (3, n) from here on. The pooled pairs (moved, matched target) then (matched moved,
+    # target), refilled in place every iteration.
+    moved, target = source.T.copy(), target.T.copy()
+    pooled_source, pooled_target = np.empty((3, n_source + n_target)), np.empty((3, n_source + n_target))
+    pooled_target[:, n_source:] = target
     rotation, translation = np.eye(3), np.zeros(3)
-    moved = source
     previous = np.inf
     converged = False
     iteration = 0
     while iteration < max_iter:
-        forward_dist, forward_idx = forward.query(moved)
-        back_dist, back_idx = back.query((target - translation) @ rotation)
+        forward_dist, forward_idx = forward.query(moved.T)
+        back_dist, back_idx = back.query((rotation.T @ (target - translation[:, None])).T)
         error = (forward_dist.sum() + back_weight * back_dist.sum()) / (2 * n_source)
         if abs(previous - error) < tol:
             converged = True
             break
         previous = error
-        pooled_source[:n_source], pooled_source[n_source:] = moved, moved[back_idx]
-        pooled_target[:n_source] = target[forward_idx]
+        pooled_source[:, :n_source] = moved
+        np.take(moved, back_idx, axis=1, out=pooled_source[:, n_source:])
+        np.take(target, forward_idx, axis=1, out=pooled_target[:, :n_source])
         step_rotation, step_translation = _kabsch(pooled_source, pooled_target, weights)
-        moved = moved @ step_rotation.T + step_translation
+        moved = step_rotation @ moved + step_translation[:, None]
         rotation, translation = step_rotation @ rotation, step_rotation @ translation + step_translation
         iteration += 1
         if callback is not None:
