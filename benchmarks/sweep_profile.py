@@ -12,7 +12,8 @@ so that runs on machines of different speed compare. Steps:
    ``snakemake --cores N``, the clone first on ``PYTHONPATH``);
 4. read every job's Snakemake ``benchmark:`` file (``results/benchmarks/{rule}/...tsv``, its wall time ``s``) and,
    for the rules that time their own computation, the job's timing table (the seconds a fit's seeds, a chunk's
-   trials or an odometry run's frames took): overhead = job wall time - computation;
+   trials or an odometry run's frames took): overhead = job wall time - computation; and the visual-odometry
+   stage's share of the job time (the ``odometry_*`` rules' job walls over all jobs'; goal ≤ a third);
 5. account for the cores' idle time, ``cores x wall - sum of job walls``, from Snakemake's metadata
    (``.snakemake/metadata``: each job's start, the time its outputs were written, its inputs): before the first
    job starts (Snakemake builds the DAG), with fewer jobs running than cores (between a job's end and the next
@@ -109,6 +110,15 @@ def job_spans(workdir):
     return list(jobs.values())
 
 
+def stage_line(jobs, prefix="odometry"):
+    """Markdown line: the job wall time of the rules named ``prefix…`` (the visual-odometry stage) and its share
+    of all jobs' (the sum of job walls, as the rule table's)."""
+    total = sum(wall for times in jobs.values() for wall, _ in times)
+    stage = sum(wall for rule, times in jobs.items() if rule.startswith(prefix) for wall, _ in times)
+    return (f"Visual odometry (the `{prefix}_*` rules): {stage:.0f} of {total:.0f} s of job time, "
+            f"**{100 * stage / total:.1f}%** (goal ≤ a third).")
+
+
 def running_below(spans, cores):
     """Core-seconds left idle while fewer than ``cores`` of the jobs ``spans`` ran, between the first start and
     the last end."""
@@ -183,6 +193,7 @@ def main():
         spans = job_spans(args.workdir)
         jobs = job_times(args.workdir / "results")
         print(rule_table(jobs) + "\n")
+        print(stage_line(jobs) + "\n")
         print(idle_table(spans, jobs, args.cores, max(j["end"] for j in spans) - min(j["start"] for j in spans)))
         return
 
@@ -210,6 +221,7 @@ def main():
               "rest of the job (starting it, loading, scoring, recordings; goal ≤ 1 s median).\n")
         jobs = job_times(clone / "results")
         print(rule_table(jobs) + "\n")
+        print(stage_line(jobs) + "\n")
         print(idle_table(job_spans(clone), jobs, args.cores, wall, run_start, run_end))
     finally:
         if args.keep:
