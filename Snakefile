@@ -5,8 +5,10 @@ from pathlib import Path
 from snakemake.utils import min_version
 
 from dgmm.job_server import JobServer, script_imports
+from dgmm.snakemake_sigterm import install as install_sigterm_handler
 
 min_version("8.0")
+install_sigterm_handler()  # `kill` stops the sweep gracefully at any moment (dgmm.snakemake_sigterm)
 
 
 configfile: "config.yaml"

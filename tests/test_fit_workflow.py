@@ -1,4 +1,5 @@
 """The fitting sweep run by real Snakemake on tests/config.yaml: numbers, recordings, interruption."""
+import os
 import shutil
 import signal
 import subprocess
@@ -103,7 +104,11 @@ def test_interrupted_sweep_resumes_without_redoing_jobs(sweep, tmp_path):
     while len(list(fits.rglob("scores.csv"))) < 3 and time.monotonic() < deadline and process.poll() is None:
         time.sleep(0.2)
     process.send_signal(signal.SIGTERM)  # what `kill` sends
-    process.wait()
+    try:
+        process.wait(timeout=120)
+    except subprocess.TimeoutExpired:
+        os.killpg(process.pid, signal.SIGKILL)
+        raise AssertionError("Snakemake did not stop within 120 s of SIGTERM (see dgmm.snakemake_sigterm)") from None
     done = {path: path.stat().st_mtime_ns for path in fits.rglob("scores.csv")}
     assert 3 <= len(done) < 12, "the sweep should have been interrupted part-way"
     assert not list(tmp_path.rglob("*.part")), "an interrupted job left a partial file"

@@ -19,7 +19,13 @@ def server(tmp_path, monkeypatch):
     (tmp_path / "probe.py").write_text("import os\nIMPORTED_BY = os.getpid()\n")
     monkeypatch.setenv("PYTHONPATH", str(tmp_path))
     monkeypatch.chdir(tmp_path)
-    server = JobServer(["probe"]).start()
+    # The server and its forks inherit this process's signal dispositions: under `nohup make test` SIGHUP would be
+    # ignored there, and the tests that send it could not see it act. Default while the server starts.
+    hangup = signal.signal(signal.SIGHUP, signal.SIG_DFL)
+    try:
+        server = JobServer(["probe"]).start()
+    finally:
+        signal.signal(signal.SIGHUP, hangup)
     yield server
     server.stop()
 
