@@ -5,7 +5,8 @@ Snakemake's ``JobScheduler.exit_gracefully``, its SIGTERM handler (``kill``), ta
 that lock while it records finished jobs: a ``kill`` that lands there blocks the handler on a lock its own thread
 holds, and Snakemake hangs for good (snakemake 9.27.1; seen in ``tests/test_fit_workflow.py``'s interrupted sweep,
 whose jobs finish every few hundred milliseconds). :func:`install` makes the handler run Snakemake's own on a helper
-thread, which takes the lock once the main thread lets go of it: the same graceful stop, without the deadlock.
+thread, which takes the lock once the main thread lets go of it: the same graceful stop, without the deadlock
+(``benchmarks/sigterm_stress.py`` aims SIGTERMs at that moment and counts the runs that hang).
 """
 from __future__ import annotations
 
