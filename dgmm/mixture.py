@@ -127,13 +127,14 @@ def _unit(deviations, covariances, weights):
         ``2**e`` with ``radius / 2 < unit <= radius``; 1 when the radius is 0 (every primitive one point).
     radius : float
     """
-    spreads = np.abs(np.diagonal(covariances, axis1=1, axis2=2)).max()
-    peak = max(np.abs(deviations).max(), np.sqrt(spreads))
+    variances = np.reshape(covariances, (-1, 9))[:, [0, 4, 8]]
+    peak = max(np.abs(deviations).max(), np.sqrt(np.abs(variances).max()))
     if peak == 0:
         return 1.0, 0.0
     _, exponent = np.frexp(peak)  # squares of values scaled by 2**-exponent neither overflow nor underflow
-    squares = (np.ldexp(deviations, -exponent) ** 2).sum(axis=1)
-    squares += np.ldexp(np.diagonal(covariances, axis1=1, axis2=2), -2 * exponent).sum(axis=1)  # the traces
+    scaled = np.ldexp(deviations, -exponent)
+    squares = np.einsum("ij,ij->i", scaled, scaled)
+    squares += np.ldexp(variances, -2 * exponent).sum(axis=1)  # the traces
     radius = np.ldexp(np.sqrt(np.average(squares, weights=weights)), exponent)
     return np.ldexp(1.0, np.frexp(radius)[1] - 1), radius
 
@@ -142,32 +143,35 @@ def _unit(deviations, covariances, weights):
 # Moment features: one row per primitive, so that E- and M-step are single matrix products.
 # ---------------------------------------------------------------------------------------------------------
 
-def _moment_features(means, covariances, centre, scale, unit=1.0):
+def _moment_features(means, covariances, centre, scale, unit=1.0, out=None):
     """Feature table ``(n_prims, 11)`` of the centred moments of primitives given by means and covariances.
 
     Columns 0–5 hold the upper triangle of ``E[x xᵀ]`` (off-diagonals doubled), 6–8 the mean, 9 a one; all
-    ten multiplied by the E-step ``scale``. Column 10 is an unscaled one that carries the per-component
-    constant. Then ``features @ _component_coefficients(...)ᵀ`` is ``log rho``. Moments are of
+    ten multiplied by the E-step ``scale`` (None: unscaled). Column 10 is an unscaled one that carries the
+    per-component constant. Then ``features @ _component_coefficients(...)ᵀ`` is ``log rho``. Moments are of
     ``(x − centre) / unit``, computed without forming the data-unit second moments (which overflow at 1e155).
+    Written into ``out`` when given.
     """
     means = (means - centre) / unit
-    features = np.empty((len(means), 11))
-    features[:, :6] = covariances[:, _ROWS, _COLS] / unit**2 + means[:, _ROWS] * means[:, _COLS]
+    features = np.empty((len(means), 11)) if out is None else out
+    np.divide(covariances[:, _ROWS, _COLS], unit**2, out=features[:, :6])
+    features[:, :6] += means[:, _ROWS] * means[:, _COLS]
     features[:, 3:6] *= 2.0
     features[:, 6:9] = means
     features[:, 9] = 1.0
-    features[:, :10] *= np.reshape(scale, (-1, 1))
+    if scale is not None:
+        features[:, :10] *= np.reshape(scale, (-1, 1))
     features[:, 10] = 1.0
     return features
 
 
 def _moment_table(prims, centre, unit):
-    """:func:`_moment_features` (scale 1) of all ``prims``, built chunk by chunk so that its (n_prims, 3, 3)
+    """:func:`_moment_features` (unscaled) of all ``prims``, built chunk by chunk so that its (n_prims, 3, 3)
     temporaries never exist for all primitives at once."""
     table = np.empty((len(prims), 11))
     for start in range(0, len(prims), _TABLE_CHUNK):
         rows = slice(start, start + _TABLE_CHUNK)
-        table[rows] = _moment_features(prims.means[rows], prims.covariances[rows], centre, 1.0, unit)
+        _moment_features(prims.means[rows], prims.covariances[rows], centre, None, unit, out=table[rows])
     return table
 
 
