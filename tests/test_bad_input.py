@@ -87,6 +87,10 @@ CASES = {
                                        FitError, "initialisation.*duplicate or coplanar primitives need reg_covar"),
     "fit coplanar, reg_covar=0": Lib(lambda c: GaussianMixture(2, reg_covar=0.0, random_state=0).fit(COPLANAR),
                                      FitError, "EM (initialisation|iteration \\d+).*reg_covar > 0"),
+    # sqrt(trace) = sqrt(3e306): the diagonals, not the first row, whose entries are 1e306 and 0.5e306 twice
+    "fit covariances of 1e306": Lib(lambda c: GaussianMixture(1).fit(Primitives.from_gaussians(
+        np.zeros((4, 3)), np.tile(np.full((3, 3), 0.5e306) + 0.5e306 * np.eye(3), (4, 1, 1)), np.ones(4))),
+        InputError, "RMS radius about its centre is 1.73e\\+153"),
     "fit reg_covar too large": Lib(lambda c: GaussianMixture(2, reg_covar=1e300).fit(points() * 1e-150),
                                    InputError, "reg_covar=1e\\+300 is too large"),
     "fit K above primitives": Lib(lambda c: GaussianMixture(300).fit(points()), InputError, "larger than"),
