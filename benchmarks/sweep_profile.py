@@ -110,11 +110,15 @@ def job_spans(workdir):
     return list(jobs.values())
 
 
+def job_wall(jobs, prefix=""):
+    """Sum of the job wall times of the rules named ``prefix…`` (every rule by default)."""
+    return sum(wall for rule, times in jobs.items() if rule.startswith(prefix) for wall, _ in times)
+
+
 def stage_line(jobs, prefix="odometry"):
     """Markdown line: the job wall time of the rules named ``prefix…`` (the visual-odometry stage) and its share
-    of all jobs' (the sum of job walls, as the rule table's)."""
-    total = sum(wall for times in jobs.values() for wall, _ in times)
-    stage = sum(wall for rule, times in jobs.items() if rule.startswith(prefix) for wall, _ in times)
+    of all jobs'."""
+    total, stage = job_wall(jobs), job_wall(jobs, prefix)
     return (f"Visual odometry (the `{prefix}_*` rules): {stage:.0f} of {total:.0f} s of job time, "
             f"**{100 * stage / total:.1f}%** (goal ≤ a third).")
 
@@ -157,12 +161,12 @@ def critical_path(spans):
 def idle_table(spans, jobs, cores, wall, run_start=None, run_end=None):
     """Markdown lines accounting for the run's idle core-seconds, ``cores x wall - sum of job walls`` (job walls
     from the benchmark files, ``jobs`` as :func:`job_times` returns), and its critical path."""
-    job_wall = sum(w for times in jobs.values() for w, _ in times)
+    walls = job_wall(jobs)
     first, last = min(j["start"] for j in spans), max(j["end"] for j in spans)
     before = cores * (first - run_start) if run_start is not None else 0.0
     after = cores * (run_end - last) if run_end is not None else 0.0
     below = running_below(spans, cores)
-    idle = cores * wall - job_wall
+    idle = cores * wall - walls
     length, chain = critical_path(spans)
     steps = [rule for i, rule in enumerate(chain) if i == 0 or rule != chain[i - 1]]
     return "\n".join([
