@@ -4,11 +4,11 @@ from pathlib import Path
 
 from snakemake.utils import min_version
 
-from dgmm.job_server import JobServer, script_imports
-from dgmm.snakemake_sigterm import install as install_sigterm_handler
+from dgmm.runtime.job_server import JobServer, script_imports
+from dgmm.runtime.snakemake_sigterm import install as install_sigterm_handler
 
 min_version("8.0")
-install_sigterm_handler()  # `kill` stops the sweep gracefully at any moment (dgmm.snakemake_sigterm)
+install_sigterm_handler()  # `kill` stops the sweep gracefully at any moment (dgmm.runtime.snakemake_sigterm)
 
 
 configfile: "config.yaml"
@@ -27,8 +27,8 @@ include: "workflow/rules/checks.smk"
 include: "workflow/rules/report.smk"
 
 
-# Job scripts hand over to one server per run that has imported their libraries (dgmm.job_server): a job starts in
-# milliseconds instead of seconds. On a cluster, and run by hand, a script runs in its own process.
+# Job scripts hand over to one server per run that has imported their libraries (dgmm.runtime.job_server): a job
+# starts in milliseconds instead of seconds. On a cluster, and run by hand, a script runs in its own process.
 JOB_SCRIPTS = sorted(Path(workflow.basedir, "workflow/scripts").glob("*.py"))
 JOB_SERVER = JobServer(["snakemake.script", *script_imports(JOB_SCRIPTS)])
 

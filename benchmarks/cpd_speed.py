@@ -1,7 +1,7 @@
 """CPD speed: dgmm's rigid CPD (dgmm.registration.cpd) against pycpd's RigidRegistration, same trials, one thread.
 
-The paper's Fig 5 problem: bunny res4, trials drawn as the workflow draws them (dgmm.trials.make_trials: 453 source
-and 453 target points from a dense surface sample, ±15° per axis, ±0.05 per axis), 150 iterations, tol 1e-9.
+The paper's Fig 5 problem: bunny res4, trials drawn as the workflow draws them (dgmm.experiments.trials.make_trials:
+453 source and 453 target points from a dense surface sample, ±15° per axis, ±0.05 per axis), 150 iterations, tol 1e-9.
 Each trial is registered by both, interleaved so that load on the shared machine hits them alike; pycpd's rigid
 part is read as the workflow reads it (Kabsch of the source to pycpd's moved source). Prints the median wall and
 process CPU time per registration, the CPU time ratio, the iterations, and the largest difference between the
@@ -23,8 +23,8 @@ import trimesh  # noqa: E402
 from pycpd import RigidRegistration  # noqa: E402
 from threadpoolctl import threadpool_limits  # noqa: E402
 
+from dgmm.experiments.trials import bounding_diagonal, make_trials  # noqa: E402
 from dgmm.registration import kabsch, register_cpd  # noqa: E402
-from dgmm.trials import bounding_diagonal, make_trials  # noqa: E402
 
 BUNNY = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "stanford" / "bunny_res4.ply"
 

@@ -1,7 +1,7 @@
 """Registration side by side: our P2D, D2D, ICP and CPD against Open3D, small_gicp and probreg, same seeded trials.
 
-The trials are the workflow's own (``dgmm.trials.make_trials``, root seed 0, Fig 5's protocol): the bunny res4
-(453 source points, ±15° and ±0.05 m per axis) and one Table 1 model in millimetres (Lucy, quadric1000 mesh);
+The trials are the workflow's own (``dgmm.experiments.trials.make_trials``, root seed 0, Fig 5's protocol): the bunny
+res4 (453 source points, ±15° and ±0.05 m per axis) and one Table 1 model in millimetres (Lucy, quadric1000 mesh);
 source and target points drawn from a 50,000-point Poisson-disk sample of the mesh the registered mesh comes from,
 P2D mixtures (K=100, k-means start, the scaled protocol's covariance floor) fitted as the workflow fits them
 (``mesh-kmeans`` to the exact triangles, ``points-kmeans`` to the vertices). Every method starts from the identity
@@ -37,11 +37,11 @@ from threadpoolctl import threadpool_limits  # noqa: E402
 
 from dgmm import registration as reg  # noqa: E402
 from dgmm.data import REGISTRY, fetch, load_mesh  # noqa: E402
+from dgmm.experiments.sweep import job_seed  # noqa: E402
+from dgmm.experiments.trials import bounding_diagonal, fit_mixture, make_trials, protocol_reg_covar  # noqa: E402
 from dgmm.meshes import REDUCTIONS  # noqa: E402
 from dgmm.mixture import GaussianMixture  # noqa: E402
 from dgmm.primitives import Primitives  # noqa: E402
-from dgmm.sweep import job_seed  # noqa: E402
-from dgmm.trials import bounding_diagonal, fit_mixture, make_trials, protocol_reg_covar  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 MIRRORS = [ROOT / ".." / "shared" / "data" / "stanford"]

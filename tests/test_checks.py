@@ -1,19 +1,19 @@
-"""dgmm.checks against independent references: scipy's rotations and Gaussian density, Monte Carlo integrals over
-triangles, and counts by hand."""
+"""dgmm.experiments.checks against independent references: scipy's rotations and Gaussian density, Monte Carlo
+integrals over triangles, and counts by hand."""
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 from scipy.stats import multivariate_normal
 
-from dgmm.checks.convergence import coverage, effective_components, iterations_to_converge
-from dgmm.checks.optimisers import _rotvec_params
-from dgmm.checks.resampling import component_integrals, split_in_four
-from dgmm.checks.timing import d2d_cost
 from dgmm.data import load_mesh, load_points
+from dgmm.experiments.checks.convergence import coverage, effective_components, iterations_to_converge
+from dgmm.experiments.checks.optimisers import _rotvec_params
+from dgmm.experiments.checks.resampling import component_integrals, split_in_four
+from dgmm.experiments.checks.timing import d2d_cost
+from dgmm.experiments.sweep import build_input, fit_seeds
 from dgmm.mixture import GaussianMixture
 from dgmm.primitives import Primitives
-from dgmm.sweep import build_input, fit_seeds
-from dgmm.tables import read_csv
+from dgmm.runtime.tables import read_csv
 from tests.workflow import run_snakemake
 
 

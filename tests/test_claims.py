@@ -1,8 +1,8 @@
-"""One claim's rule per module of dgmm.report.claims, graded on hand-made tables, with the verdict it must give
-derived by hand, and a change of the table that flips it."""
-from dgmm.report import claims
-from dgmm.report.claims import convergence, decimation, fitting, odometry, registration, table1, theory
-from dgmm.report.claims.measurements import Measurements
+"""One claim's rule per module of dgmm.experiments.report.claims, graded on hand-made tables, with the verdict it must
+give derived by hand, and a change of the table that flips it."""
+from dgmm.experiments.report import claims
+from dgmm.experiments.report.claims import convergence, decimation, fitting, odometry, registration, table1, theory
+from dgmm.experiments.report.claims.measurements import Measurements
 
 
 def likelihood(cells, model="bunny", seeds=(0,)):

@@ -1,12 +1,13 @@
-"""dgmm.coarse_to_fine: widened mixtures, the schedule, and poses recovered where one BFGS from the identity fails."""
+"""dgmm.registration.coarse_to_fine: widened mixtures, the schedule, and poses recovered where one BFGS from the
+identity fails."""
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from dgmm.coarse_to_fine import WidenedMixture, register_p2d_coarse_to_fine
 from dgmm.errors import InputError
 from dgmm.mixture import GaussianMixture
 from dgmm.registration import register_p2d
+from dgmm.registration.coarse_to_fine import WidenedMixture, register_p2d_coarse_to_fine
 
 
 @pytest.fixture(scope="module")

@@ -10,10 +10,10 @@ import pytest
 from matplotlib.collections import PathCollection
 from scipy.spatial.transform import Rotation
 
+from dgmm.experiments.report import paper
+from dgmm.experiments.report.figures import fig5_registration
 from dgmm.odometry.figure import fig6
 from dgmm.odometry.tum import Trajectory
-from dgmm.report import paper
-from dgmm.report.figures import fig5_registration
 
 METHODS = ["mesh-kmeans", "points-random", "icp", "cpd"]
 

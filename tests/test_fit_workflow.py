@@ -9,8 +9,8 @@ from collections import defaultdict
 import numpy as np
 import pytest
 
-from dgmm.shared_responsibility import PER_POINT_MEASURE
-from dgmm.tables import read_csv
+from dgmm.experiments.shared_responsibility import PER_POINT_MEASURE
+from dgmm.runtime.tables import read_csv
 from tests.test_recording import read_blueprint, read_mcap, read_rrd
 from tests.workflow import RERUN, TABLE_SHA256, TEST_CONFIG, run_snakemake, sha256, snakemake_command
 
@@ -108,7 +108,8 @@ def test_interrupted_sweep_resumes_without_redoing_jobs(sweep, tmp_path):
         process.wait(timeout=120)
     except subprocess.TimeoutExpired:
         os.killpg(process.pid, signal.SIGKILL)
-        raise AssertionError("Snakemake did not stop within 120 s of SIGTERM (see dgmm.snakemake_sigterm)") from None
+        raise AssertionError("Snakemake did not stop within 120 s of SIGTERM (see dgmm.runtime.snakemake_sigterm)") \
+            from None
     done = {path: path.stat().st_mtime_ns for path in fits.rglob("scores.csv")}
     assert 3 <= len(done) < 12, "the sweep should have been interrupted part-way"
     assert not list(tmp_path.rglob("*.part")), "an interrupted job left a partial file"

@@ -8,9 +8,9 @@ from pathlib import Path
 
 import pytest
 
-from dgmm.job_server import ADDRESS_VARIABLE, JobServer, script_imports
+from dgmm.runtime.job_server import ADDRESS_VARIABLE, JobServer, script_imports
 
-HAND_OVER = "from dgmm.job_server import hand_over\nhand_over()\n"
+HAND_OVER = "from dgmm.runtime.job_server import hand_over\nhand_over()\n"
 
 
 @pytest.fixture

@@ -16,7 +16,7 @@ from PIL import Image
 from dgmm.errors import DataError
 from dgmm.odometry import first_frames, seconds_summary
 from dgmm.odometry.tum import read_sequence
-from dgmm.tables import read_csv
+from dgmm.runtime.tables import read_csv
 from tests.test_recording import read_blueprint, read_mcap, read_rrd, xyz
 from tests.workflow import RERUN, TABLE_SHA256, TEST_CONFIG, TEST_CONFIG_FILE, run_snakemake, sha256
 

@@ -14,8 +14,8 @@ import pytest
 import trimesh
 from scipy.spatial.transform import Rotation
 
-from dgmm.tables import read_csv
-from dgmm.trials import METHODS, method_variants, mixture_source
+from dgmm.experiments.trials import METHODS, method_variants, mixture_source
+from dgmm.runtime.tables import read_csv
 from tests.test_recording import read_blueprint, read_mcap, read_rrd, xyz
 from tests.workflow import RERUN, TABLE_SHA256, TEST_CONFIG, run_snakemake, sha256
 

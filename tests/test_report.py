@@ -14,13 +14,13 @@ import yaml
 from matplotlib.figure import Figure
 
 from dgmm.data import load_mesh, save_ply
-from dgmm.report import claims, figure_names
-from dgmm.report.claims import theory
-from dgmm.report.build import SUMMARY_HEADER, figure_of, summary_rows
-from dgmm.report.document import markdown_table, to_html, to_markdown
-from dgmm.report.tables import fig2_bars, likelihood_means, registration_errors, table1, table1_mesh
-from dgmm.shared_responsibility import PER_POINT_MEASURE
-from dgmm.tables import read_csv, write_csv
+from dgmm.experiments.report import claims, figure_names
+from dgmm.experiments.report.build import SUMMARY_HEADER, figure_of, summary_rows
+from dgmm.experiments.report.claims import theory
+from dgmm.experiments.report.document import markdown_table, to_html, to_markdown
+from dgmm.experiments.report.tables import fig2_bars, likelihood_means, registration_errors, table1, table1_mesh
+from dgmm.experiments.shared_responsibility import PER_POINT_MEASURE
+from dgmm.runtime.tables import read_csv, write_csv
 from tests.conftest import SHARED_DATA
 
 REPO = Path(__file__).resolve().parents[1]
@@ -239,7 +239,7 @@ def synthetic_results(results):
 
 
 def write_check_tables(tables):
-    """The checks' tables (dgmm.checks), a row or two each."""
+    """The checks' tables (dgmm.experiments.checks), a row or two each."""
     write_csv(tables / "convergence.csv", [
         {"model": "bunny", "input": name, "variant": variant, "K": 100, "init": "kmeans", "seed": 0,
          "eval_ll_25": 7.0, "eval_ll_final": 7.1, "bound_25": 8.0, "bound_final": 8.1, "n_iter_within_0.1": n,

@@ -5,8 +5,8 @@ from scipy.special import logsumexp
 from scipy.stats import multivariate_normal
 
 from dgmm import GaussianMixture, Primitives
-from dgmm.shared_responsibility import per_point_likelihoods, triangle_points
-from dgmm.sweep import expected_log_likelihood
+from dgmm.experiments.shared_responsibility import per_point_likelihoods, triangle_points
+from dgmm.experiments.sweep import expected_log_likelihood
 from tests.test_mixture import component_log_densities, jensen_gap_upper_bound, triangle_terms
 
 

@@ -1,4 +1,4 @@
-"""Snakemake's SIGTERM handler under dgmm.snakemake_sigterm: a kill that lands while the main thread holds the
+"""Snakemake's SIGTERM handler under dgmm.runtime.snakemake_sigterm: a kill that lands while the main thread holds the
 scheduler's lock stops the run instead of hanging it. Real signals, in a child process (a hang cannot take the test
 run with it)."""
 import subprocess
@@ -10,7 +10,7 @@ import textwrap
 _CHILD = textwrap.dedent("""
     import os, signal, sys, threading
     from snakemake.scheduling.job_scheduler import JobScheduler
-    from dgmm.snakemake_sigterm import install
+    from dgmm.runtime.snakemake_sigterm import install
     install()
     install()  # a second Snakefile parse (e.g. a job re-reading it) wraps nothing twice
     assert not hasattr(JobScheduler.exit_gracefully.wrapped, "wrapped")

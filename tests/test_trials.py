@@ -1,13 +1,13 @@
-"""dgmm.trials: seeded trials shared by every method, the methods table, run_trials on known poses."""
+"""dgmm.experiments.trials: seeded trials shared by every method, the methods table, run_trials on known poses."""
 import numpy as np
 import pytest
 import trimesh
 from scipy.spatial.transform import Rotation
 
 from dgmm.errors import InputError
+from dgmm.experiments.trials import (METHODS, PROTOCOLS, bounding_diagonal, fit_mixture, make_trials, mixture_source,
+                                     protocol_reg_covar, run_trials)
 from dgmm.mixture import GaussianMixture
-from dgmm.trials import (METHODS, PROTOCOLS, bounding_diagonal, fit_mixture, make_trials, mixture_source,
-                         protocol_reg_covar, run_trials)
 
 
 def sphere_points(n, seed=0):

@@ -5,7 +5,7 @@ iterations on all of them, and the hard-label M-step (paper §V does not state t
 Both steps are written out in numpy for speed: per frame, scikit-learn's ``kmeans_plusplus`` spent 10-14 ms on
 1,024 primitives and K = 100, nearly all of it validating its inputs once per seed, where the same greedy
 algorithm here takes about 2 ms; a Lloyd pass's distances are one matrix product of the points with a column of
-ones against the centres (``benchmarks/odometry_schedules.py``; the docs' Visual odometry section).
+ones against the centres (``benchmarks/studies/odometry_schedules.py``; the docs' Visual odometry section).
 """
 from __future__ import annotations
 

@@ -5,7 +5,7 @@ and registers with the determinant-free D2D cost; ``"gmm-points"`` does the same
 points; ``"icp"`` keeps 2,500 points drawn at random from each frame's back-projection for point-to-point ICP.
 
 Schedules (:data:`SCHEDULES`): the paper does not state how each frame's EM starts or how long it runs, nor its
-odometry's solver, so the sweep's schedule is chosen by measurement (``benchmarks/odometry_schedules.py``) and the
+odometry's solver, so the sweep's schedule is chosen by measurement (``benchmarks/studies/odometry_schedules.py``) and the
 code before that choice is kept as ``"reference"``. Every frame's start is drawn from its own seed.
 
 Warm start (``warm_iter``): every frame after the first starts from the previous frame's mixture (its starved
@@ -51,7 +51,7 @@ CUT_TOL = 1e-3
 fr1/xyz's radius of about 1 m; :func:`dgmm.odometry.measured_cut.register_cut_rounds`). fr1/xyz, 798 frames,
 textbook EM, seeds 0-4: ATE 0.0374, 0.0393, 0.0376, 0.0437 and 0.0420 m against 0.0374, 0.0388, 0.0370, 0.0433
 and 0.0409 with all three rounds; the rounds' CPU per frame 24 → 18 ms (with :data:`ROUND_TOL` on the last
-registration too). The rotation-only room keeps every frame within 3 cm (``benchmarks/odometry_rotation_room.py``,
+registration too). The rotation-only room keeps every frame within 3 cm (``benchmarks/studies/odometry_rotation_room.py``,
 seeds 0-4, both EMs)."""
 
 STARVED_WEIGHT = 0.1
@@ -137,8 +137,8 @@ SCHEDULES = {
                            overlap_refits=2),
     "reference": Schedule(seed_sample=None, lloyd_iter=0, em_iter=25, solver="bfgs"),
 }
-"""Named per-frame schedules, chosen by measurement (benchmarks/odometry_schedules.py,
-benchmarks/odometry_rotation_room.py; the docs' Visual odometry section). ``"fast"``: k-means++ seeds from 1,024
+"""Named per-frame schedules, chosen by measurement (benchmarks/studies/odometry_schedules.py,
+benchmarks/studies/odometry_rotation_room.py; the docs' Visual odometry section). ``"fast"``: k-means++ seeds from 1,024
 primitives, 3 Lloyd iterations and 2 EM iterations on every primitive, Gauss-Newton D2D of the whole mixtures.
 ``"overlap"``, the sweep's default: the same mixtures, registered first on the components each camera sees of the
 other, widened by 0.0625 RMS radii (it keeps fast turns in the right basin), then up to three times, until the pose
@@ -248,7 +248,7 @@ MIXTURE_METHODS = ("gmm-pixels", "gmm-points")
 UNSIZED_METHODS = ("gmm-points",)
 """Mixture methods whose primitives all have size 1: every EM variant is the same algorithm there (the authors'
 E-step scale ``alpha / min(alpha)`` is 1 and their unweighted M-step is the textbook one), so they run textbook EM
-only, as the registration's point mixtures do (:func:`dgmm.trials.method_variants`)."""
+only, as the registration's point mixtures do (:func:`dgmm.experiments.trials.method_variants`)."""
 
 
 def odometry_runs(methods, variants):

@@ -3,11 +3,11 @@
 Under fast rotation a frame loses and gains a tenth of its view per frame. Each frame's mixture tiles its own view,
 so on a plane that runs out of the image (a wall, the floor) the tiles of two frames end in different places, and
 D2D slides one tiling along the plane to match the other: translation errors of 5-15 cm with the rotation right
-(the synthetic room under rotation-only motion, ``benchmarks/odometry_rotation_room.py``; noise-free renderings
+(the synthetic room under rotation-only motion, ``benchmarks/studies/odometry_rotation_room.py``; noise-free renderings
 fail alike, the same frames fitted on their common field of view do not). :func:`register_d2d_overlap` registers,
 round by round, the components of each mixture whose mean the other camera sees at the pose found so far.
-A coarse-to-fine schedule (both mixtures widened, then narrowed, as :mod:`dgmm.coarse_to_fine` does for P2D)
-finds the right basin where the first registration of the whole mixtures does not; widened without the overlap,
+A coarse-to-fine schedule (both mixtures widened, then narrowed, as :mod:`dgmm.registration.coarse_to_fine` does for
+P2D) finds the right basin where the first registration of the whole mixtures does not; widened without the overlap,
 the same schedule only adds a bias (wide components match the views' whole extents). Whole components still keep
 the tiles that straddle the other view's edge: :func:`register_d2d_common_view` then refits both frames on the
 primitives the other camera sees and registers them from that pose; with two refits every frame of the room is
@@ -17,10 +17,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from dgmm.coarse_to_fine import WidenedMixture, _check_scales
 from dgmm.errors import InputError
 from dgmm.primitives import Primitives
 from dgmm.registration import Registration, register_d2d
+from dgmm.registration.coarse_to_fine import WidenedMixture, _check_scales
 
 
 def seen_by(means, rotation, translation, intrinsics):

@@ -17,7 +17,7 @@ One concept per module:
 - :mod:`~dgmm.recording.blueprints`: the layout every ``.rrd`` opens with.
 - :mod:`~dgmm.recording.fit_recorder`, :mod:`~dgmm.recording.registration_recorder`,
   :mod:`~dgmm.recording.odometry_recorder`: the callbacks the workflow and the CLI pass to the estimator,
-  ``dgmm.trials.run_trials`` and ``dgmm.odometry.run_odometry``.
+  ``dgmm.experiments.trials.run_trials`` and ``dgmm.odometry.run_odometry``.
 
 Every file is written under a temporary name beside its target and renamed on a clean close, so a failed job
 leaves no partial output (:mod:`~dgmm.recording.output`).
@@ -26,14 +26,8 @@ from dgmm.recording.blueprints import fit_blueprint, odometry_blueprint, registr
 from dgmm.recording.ellipsoids import DEFAULT_N_SIGMA, covariance_ellipsoids
 from dgmm.recording.fit_recorder import FitRecorder
 from dgmm.recording.foxglove_messages import ellipsoid_scene_update, poses_in_frame
-from dgmm.recording.json_schemas import (
-    FIT_ITERATION_SCHEMA,
-    FIT_PARAMS_SCHEMA,
-    ODOMETRY_FRAME_SCHEMA,
-    ODOMETRY_PARAMS_SCHEMA,
-    REGISTRATION_PARAMS_SCHEMA,
-    REGISTRATION_TRIAL_SCHEMA,
-)
+from dgmm.recording.json_schemas import (FIT_ITERATION_SCHEMA, FIT_PARAMS_SCHEMA, ODOMETRY_FRAME_SCHEMA,
+                                         ODOMETRY_PARAMS_SCHEMA, REGISTRATION_PARAMS_SCHEMA, REGISTRATION_TRIAL_SCHEMA)
 from dgmm.recording.mcap_writer import TICK_NS, McapWriter
 from dgmm.recording.odometry_recorder import OdometryRecorder
 from dgmm.recording.registration_recorder import RegistrationRecorder

@@ -13,8 +13,6 @@ from sphinx.pycode import ModuleAnalyzer
 PACKAGES = ["dgmm", "dgmm.registration", "dgmm.recording", "dgmm.odometry"]
 # Modules documented beside the packages (whole-module pages): the tools the user guide names.
 MODULES = [
-    "dgmm.coarse_to_fine",  # Coarse-to-fine P2D registration.
-    "dgmm.shared_responsibility",  # Fig 2's per-point responsibilities within triangles.
     "dgmm.data",  # The model registry: mesh files, their checksums and sources.
     "dgmm.meshes",  # Poisson-disk and Monte-Carlo sampling, quadric and clustering decimation (pymeshlab).
     "dgmm.model_io",  # Saving and loading fitted mixtures (.npz).

@@ -1,5 +1,5 @@
-# Checks (dgmm.checks): small experiments for claims of the paper the sweeps above do not measure, run when config
-# has a `checks` section (else the report says those claims are pending). Under results/tables/:
+# Checks (dgmm.experiments.checks): small experiments for claims of the paper the sweeps above do not measure, run
+# when config has a `checks` section (else the report says those claims are pending). Under results/tables/:
 #   convergence.csv        fits run to checks.convergence.max_iter iterations from the Fig 3 sweep's seeds: eval
 #                          log-likelihood at 25 and at max_iter, iterations to converge, Fig 7's fuller-model numbers
 #   resampling.csv         a mesh against its copy with every triangle split in four (paper section II)

@@ -1,7 +1,7 @@
 # Config validation, the paths every stage shares and the input functions of the rules (Snakemake's catalogue
 # layout: the stage files hold rules only, the functions they call live here).
 # Every job declares resources (mem_mb, runtime in minutes, cpus_per_task) for cluster schedulers: measured peaks
-# (benchmarks/job_resources.py, docs/user_guide/slurm.md) with about 2x memory and 15x time headroom.
+# (benchmarks/studies/job_resources.py, docs/user_guide/slurm.md) with about 2x memory and 15x time headroom.
 import os
 
 from snakemake.utils import validate
@@ -9,9 +9,9 @@ from snakemake.utils import validate
 from dgmm.data import REGISTRY
 from dgmm.odometry import odometry_runs
 from dgmm.odometry.pixels import sequence_intrinsics
-from dgmm.report import figure_names
-from dgmm.sweep import parse_input, variants_for
-from dgmm.trials import METHODS, NO_VARIANT, PROTOCOLS, method_variants, mixture_source
+from dgmm.experiments.report import figure_names
+from dgmm.experiments.sweep import parse_input, variants_for
+from dgmm.experiments.trials import METHODS, NO_VARIANT, PROTOCOLS, method_variants, mixture_source
 
 validate(config, schema="../schemas/config.schema.yaml")
 
@@ -111,7 +111,7 @@ def evaluation_set(wildcards):
 def registration_experiments():
     """(model, mesh) -> (trials, methods, protocols) over every experiment; an experiment repeated on the same mesh
     takes the most trials, every method and every protocol (trials are the same for every experiment, see
-    dgmm.trials)."""
+    dgmm.experiments.trials)."""
     jobs = {}
     for experiment in REG["experiments"].values():
         for model in experiment["models"]:
@@ -134,7 +134,7 @@ def chunk_range(wildcards):
 
 def registration_outputs(name):
     """Path of file ``name`` of every configured chunk, ordered by model, mesh, protocol, configured method,
-    variant (dgmm.trials.method_variants), chunk."""
+    variant (dgmm.experiments.trials.method_variants), chunk."""
     size = REG["trials_per_chunk"]
     return [
         f"{RESULTS}/registration/{model}/{mesh}/{protocol}/{variant}/{method}/c{chunk}/{name}"

@@ -2,11 +2,11 @@
 # random rigid trials registered by each method, every method on the same trials and source points. The source
 # points are drawn from the Poisson-disk evaluation set of the mesh the registered mesh comes from (res4's own,
 # else the full model's). Each experiment runs under its trial protocols (scaled, literal) and each mesh mixture
-# under every EM variant of registration.variants (dgmm.trials.method_variants; ICP and CPD under "none").
+# under every EM variant of registration.variants (dgmm.experiments.trials.method_variants; ICP and CPD under "none").
 # Under results/registration/{model}/{mesh}/{protocol}/{variant}/{method}/:
 #   gmm.npz, fit.mcap, fit.rrd   P2D methods: the mixture, fitted once and used by every chunk, and its fit logs
 #                                (*-c2f methods use their paper P2D's mixture; its covariance floor follows the
-#                                protocol, dgmm.trials.protocol_reg_covar)
+#                                protocol, dgmm.experiments.trials.protocol_reg_covar)
 #   c{chunk}/errors.csv          one row per trial: errors, iterations, convergence (deterministic)
 #   c{chunk}/seconds.csv         each trial's wall time (kept apart so that errors stay byte-identical)
 #   c{chunk}/trials.mcap         every trial's true and estimated pose, errors, iterations and time (Foxglove)

@@ -1,5 +1,5 @@
-"""Job: one input's fits run to 100 iterations from the fitting sweep's seeds (dgmm.checks.convergence)."""
-from dgmm.job_server import hand_over
+"""Job: one input's fits run to 100 iterations from the fitting sweep's seeds (dgmm.experiments.checks.convergence)."""
+from dgmm.runtime.job_server import hand_over
 
 hand_over()  # in a sweep, the rest runs in a fork of the job server, its imports already loaded
 
@@ -7,10 +7,10 @@ import sys
 
 from threadpoolctl import threadpool_limits
 
-from dgmm.checks.convergence import COLUMNS, convergence_rows
 from dgmm.data import load_mesh, load_points
-from dgmm.sweep import build_input, parse_input
-from dgmm.tables import write_csv
+from dgmm.experiments.checks.convergence import COLUMNS, convergence_rows
+from dgmm.experiments.sweep import build_input, parse_input
+from dgmm.runtime.tables import write_csv
 
 smk = snakemake  # noqa: F821 (injected by Snakemake)
 sys.stderr = open(smk.log[0], "w")

@@ -1,5 +1,6 @@
-"""Job: P2D with CG and BFGS, quaternion and rotation vector, on the first Fig 5 trials (dgmm.checks.optimisers)."""
-from dgmm.job_server import hand_over
+"""Job: P2D with CG and BFGS, quaternion and rotation vector, on the first Fig 5 trials
+(dgmm.experiments.checks.optimisers)."""
+from dgmm.runtime.job_server import hand_over
 
 hand_over()  # in a sweep, the rest runs in a fork of the job server, its imports already loaded
 
@@ -7,11 +8,11 @@ import sys
 
 from threadpoolctl import threadpool_limits
 
-from dgmm.checks.optimisers import COLUMNS, optimiser_rows
 from dgmm.data import load_mesh, load_points
+from dgmm.experiments.checks.optimisers import COLUMNS, optimiser_rows
+from dgmm.experiments.trials import bounding_diagonal, make_trials
 from dgmm.model_io import load_model
-from dgmm.tables import write_csv
-from dgmm.trials import bounding_diagonal, make_trials
+from dgmm.runtime.tables import write_csv
 
 smk = snakemake  # noqa: F821 (injected by Snakemake)
 sys.stderr = open(smk.log[0], "w")

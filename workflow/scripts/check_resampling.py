@@ -1,5 +1,5 @@
-"""Job: a mesh against its copy with every triangle split in four (dgmm.checks.resampling)."""
-from dgmm.job_server import hand_over
+"""Job: a mesh against its copy with every triangle split in four (dgmm.experiments.checks.resampling)."""
+from dgmm.runtime.job_server import hand_over
 
 hand_over()  # in a sweep, the rest runs in a fork of the job server, its imports already loaded
 
@@ -7,9 +7,9 @@ import sys
 
 from threadpoolctl import threadpool_limits
 
-from dgmm.checks.resampling import COLUMNS, resampling_rows
 from dgmm.data import load_mesh, load_points
-from dgmm.tables import write_csv
+from dgmm.experiments.checks.resampling import COLUMNS, resampling_rows
+from dgmm.runtime.tables import write_csv
 
 smk = snakemake  # noqa: F821 (injected by Snakemake)
 sys.stderr = open(smk.log[0], "w")

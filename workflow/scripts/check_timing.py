@@ -1,6 +1,6 @@
 """Job: same-run CPU times of the area x centroid approximation and of D2D with and without the determinant
-(dgmm.checks.timing)."""
-from dgmm.job_server import hand_over
+(dgmm.experiments.checks.timing)."""
+from dgmm.runtime.job_server import hand_over
 
 hand_over()  # in a sweep, the rest runs in a fork of the job server, its imports already loaded
 
@@ -8,12 +8,12 @@ import sys
 
 from threadpoolctl import threadpool_limits
 
-from dgmm.checks.timing import COLUMNS, d2d_times, em_times
 from dgmm.data import load_mesh
+from dgmm.experiments.checks.timing import COLUMNS, d2d_times, em_times
+from dgmm.experiments.sweep import job_seed
 from dgmm.mixture import GaussianMixture
 from dgmm.primitives import Primitives
-from dgmm.sweep import job_seed
-from dgmm.tables import write_csv
+from dgmm.runtime.tables import write_csv
 
 smk = snakemake  # noqa: F821 (injected by Snakemake)
 sys.stderr = open(smk.log[0], "w")

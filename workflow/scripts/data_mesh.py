@@ -1,5 +1,5 @@
 """Job: fetch a registered mesh (mirror, cache or download), check its sha256 and write it as canonical PLY."""
-from dgmm.job_server import hand_over
+from dgmm.runtime.job_server import hand_over
 
 hand_over()  # in a sweep, the rest runs in a fork of the job server, its imports already loaded
 

@@ -1,5 +1,5 @@
 """Job: one pymeshlab sampling or decimation of a mesh to a budget (one per process: its samplers take no seed)."""
-from dgmm.job_server import hand_over
+from dgmm.runtime.job_server import hand_over
 
 hand_over()  # in a sweep, the rest runs in a fork of the job server, its imports already loaded
 

@@ -1,7 +1,7 @@
 """Job: Fig 2. Fit K components to dense random samples of a mesh, then compare likelihood expressions: the
 triangle bound, centroids, area × centroids, the triangles with a responsibility per point, and n sampled points
 (several draws per n)."""
-from dgmm.job_server import hand_over
+from dgmm.runtime.job_server import hand_over
 
 hand_over()  # in a sweep, the rest runs in a fork of the job server, its imports already loaded
 
@@ -12,10 +12,10 @@ from threadpoolctl import threadpool_limits
 
 from dgmm import GaussianMixture, Primitives
 from dgmm.data import load_mesh
+from dgmm.experiments.shared_responsibility import PER_POINT_MEASURE, SUBDIVISIONS, per_point_likelihoods
+from dgmm.experiments.sweep import expected_log_likelihood, job_seed, representation_likelihoods
 from dgmm.recording import FitRecorder
-from dgmm.shared_responsibility import PER_POINT_MEASURE, SUBDIVISIONS, per_point_likelihoods
-from dgmm.sweep import expected_log_likelihood, job_seed, representation_likelihoods
-from dgmm.tables import write_csv
+from dgmm.runtime.tables import write_csv
 
 smk = snakemake  # noqa: F821 (injected by Snakemake)
 sys.stderr = open(smk.log[0], "w")

@@ -1,5 +1,5 @@
 """Job: fit one (model, input, variant, K, init) over every seed; write scores, timings and the recordings."""
-from dgmm.job_server import hand_over
+from dgmm.runtime.job_server import hand_over
 
 hand_over()  # in a sweep, the rest runs in a fork of the job server, its imports already loaded
 
@@ -9,9 +9,9 @@ import trimesh
 from threadpoolctl import threadpool_limits
 
 from dgmm.data import load_mesh, load_points
+from dgmm.experiments.sweep import SIZED, build_input, fit_seeds, parse_input
 from dgmm.recording import FitRecorder
-from dgmm.sweep import SIZED, build_input, fit_seeds, parse_input
-from dgmm.tables import write_csv
+from dgmm.runtime.tables import write_csv
 
 smk = snakemake  # noqa: F821 (injected by Snakemake)
 sys.stderr = open(smk.log[0], "w")

@@ -1,6 +1,6 @@
 """Job: frame-to-frame visual odometry of one (sequence, run); write the trajectory, its ATE and RPE, the timings
 and the recordings."""
-from dgmm.job_server import hand_over
+from dgmm.runtime.job_server import hand_over
 
 hand_over()  # in a sweep, the rest runs in a fork of the job server, its imports already loaded
 
@@ -8,13 +8,13 @@ import sys
 
 from threadpoolctl import threadpool_limits
 
+from dgmm.experiments.sweep import job_seed
 from dgmm.odometry import first_frames, frame_seconds, run_odometry
-from dgmm.odometry.pixels import parse_intrinsics
 from dgmm.odometry.metrics import drift_metrics
+from dgmm.odometry.pixels import parse_intrinsics
 from dgmm.odometry.tum import read_sequence, write_trajectory
 from dgmm.recording import OdometryRecorder
-from dgmm.sweep import job_seed
-from dgmm.tables import write_csv
+from dgmm.runtime.tables import write_csv
 
 smk = snakemake  # noqa: F821 (injected by Snakemake)
 sys.stderr = open(smk.log[0], "w")

@@ -1,5 +1,5 @@
 """Job: Fig 6, one top-down panel per sequence: every run's trajectory against the ground truth."""
-from dgmm.job_server import hand_over
+from dgmm.runtime.job_server import hand_over
 
 hand_over()  # in a sweep, the rest runs in a fork of the job server, its imports already loaded
 

@@ -1,5 +1,5 @@
 """Job: render the synthetic TUM-format sequence (dgmm.odometry.synthetic): the room with the data-stage meshes."""
-from dgmm.job_server import hand_over
+from dgmm.runtime.job_server import hand_over
 
 hand_over()  # in a sweep, the rest runs in a fork of the job server, its imports already loaded
 
@@ -8,7 +8,7 @@ import sys
 from threadpoolctl import threadpool_limits
 
 from dgmm.data import load_mesh
-from dgmm.sweep import job_seed
+from dgmm.experiments.sweep import job_seed
 from dgmm.odometry.synthetic import room_scene, write_synthetic_sequence
 
 smk = snakemake  # noqa: F821 (injected by Snakemake)

@@ -1,13 +1,13 @@
 """Job: gather the odometry jobs' ATE and RPE rows into one table (a configured sequence whose folder is missing is
 a row with its path and no numbers: pending), and summarise their per-frame timings in another."""
-from dgmm.job_server import hand_over
+from dgmm.runtime.job_server import hand_over
 
 hand_over()  # in a sweep, the rest runs in a fork of the job server, its imports already loaded
 
 import sys
 
 from dgmm.odometry import seconds_summary
-from dgmm.tables import read_csv, write_csv
+from dgmm.runtime.tables import read_csv, write_csv
 
 smk = snakemake  # noqa: F821 (injected by Snakemake)
 sys.stderr = open(smk.log[0], "w")

@@ -1,5 +1,5 @@
 """Job: register one chunk of one (model, mesh)'s trials with one method; write errors, timings, recordings."""
-from dgmm.job_server import hand_over
+from dgmm.runtime.job_server import hand_over
 
 hand_over()  # in a sweep, the rest runs in a fork of the job server, its imports already loaded
 
@@ -8,10 +8,10 @@ import sys
 from threadpoolctl import threadpool_limits
 
 from dgmm.data import load_mesh, load_points
+from dgmm.experiments.trials import COLUMNS, bounding_diagonal, make_trials, run_trials
 from dgmm.model_io import load_model
 from dgmm.recording import RegistrationRecorder
-from dgmm.tables import write_csv
-from dgmm.trials import COLUMNS, bounding_diagonal, make_trials, run_trials
+from dgmm.runtime.tables import write_csv
 
 smk = snakemake  # noqa: F821 (injected by Snakemake)
 sys.stderr = open(smk.log[0], "w")

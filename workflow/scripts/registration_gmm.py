@@ -1,5 +1,5 @@
 """Job: fit the Gaussian mixture of one P2D registration method on one model's mesh under one trial protocol."""
-from dgmm.job_server import hand_over
+from dgmm.runtime.job_server import hand_over
 
 hand_over()  # in a sweep, the rest runs in a fork of the job server, its imports already loaded
 
@@ -9,10 +9,10 @@ import trimesh
 from threadpoolctl import threadpool_limits
 
 from dgmm.data import load_mesh
+from dgmm.experiments.sweep import job_seed
+from dgmm.experiments.trials import bounding_diagonal, fit_mixture, protocol_reg_covar
 from dgmm.model_io import save_model
 from dgmm.recording import FitRecorder
-from dgmm.sweep import job_seed
-from dgmm.trials import bounding_diagonal, fit_mixture, protocol_reg_covar
 
 smk = snakemake  # noqa: F821 (injected by Snakemake)
 sys.stderr = open(smk.log[0], "w")

@@ -1,5 +1,5 @@
 """Job: the report (Table 1, claims, figures) from the sweep's tables into the report folder."""
-from dgmm.job_server import hand_over
+from dgmm.runtime.job_server import hand_over
 
 hand_over()  # in a sweep, the rest runs in a fork of the job server, its imports already loaded
 
@@ -8,7 +8,7 @@ from pathlib import Path
 
 from threadpoolctl import threadpool_limits
 
-from dgmm.report import INPUTS, build_report
+from dgmm.experiments.report import INPUTS, build_report
 
 smk = snakemake  # noqa: F821 (injected by Snakemake)
 sys.stderr = open(smk.log[0], "w")
