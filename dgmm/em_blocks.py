@@ -24,10 +24,8 @@ import numpy as np
 DEFAULT_MEMORY_LIMIT = 128 * 2**20
 """Bytes of responsibilities (and their row features) that may be held at once: larger inputs stream."""
 CACHE_BLOCK_BYTES = 8 * 2**20
-"""Bytes of one streamed block. ``benchmarks/studies/em_block_size.py`` on 2 cores (69k–1.1M triangles, K = 100 and
-1000): one thread takes the same time per iteration with 2 and 8 MiB blocks, two threads 1.56–1.72x one thread
-with 2 MiB blocks and 1.91–1.98x with 8 MiB; with 0.5 MiB blocks two threads gain little (1.1–1.25x: every block
-costs a few GIL and futex hand-offs between the threads)."""
+"""Bytes of one streamed block: large enough that two threads gain nearly 2x over one (every block costs a few GIL
+and futex hand-offs between the threads), small enough to stream (measured: docs/studies/odometry_constants.md)."""
 _ROW_FLOATS = 24  # float64 per row beside the responsibilities: E-step features, weighted moments, row sums
 
 _controller = None

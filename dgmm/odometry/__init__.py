@@ -1,4 +1,4 @@
-"""Frame-to-frame visual odometry with Gaussian mixtures on TUM RGB-D sequences (paper §V "Visual Odometry").
+"""Frame-to-frame visual odometry with Gaussian mixtures on TUM RGB-D sequences (paper §VI-D "Visual Odometry").
 
 The public namespace; one concept per module:
 

@@ -1,8 +1,9 @@
 """Reading and writing 16-bit grayscale PNGs (TUM depth frames) fast: ISA-L's deflate and numpy's row filters.
 
-A TUM depth frame is a 640x480 16-bit PNG whose rows are all Sub-filtered. PIL decodes one in about 3.6 ms, 2.7 of
-them zlib's inflate; ISA-L (``isal``) inflates the same stream in 0.8 ms, and undoing the Sub filter is a running sum
-of each row's bytes modulo 256, two bytes a pixel apart: 1.2 ms in all (fr1/xyz, one thread). :func:`decode_gray16`
+A TUM depth frame is a 640x480 16-bit PNG whose rows are all Sub-filtered. Most of PIL's time decoding one is
+zlib's inflate; ISA-L (``isal``) inflates the same stream several times faster, and undoing the Sub filter is a
+running sum of each row's bytes modulo 256, two bytes a pixel apart: a third of PIL's time in all (measured:
+docs/studies/odometry_constants.md). :func:`decode_gray16`
 takes the PNGs this covers, non-interlaced 16-bit grayscale with None- or Sub-filtered rows, and leaves every other
 PNG (other bit depths or colour types, interlacing, Up, Average or Paeth rows, as PIL itself writes) to PIL.
 :func:`encode_gray16` writes what it reads fast: every row Sub-filtered, deflated by ISA-L.

@@ -1,11 +1,11 @@
 """Each odometry frame's EM start under a sampled schedule: k-means++ seeds on a sample of the primitives, Lloyd
-iterations on all of them, and the hard-label M-step (paper §V does not state the start; see
+iterations on all of them, and the hard-label M-step (paper §VI-D does not state the start; see
 :mod:`dgmm.odometry.frame_model`).
 
-Both steps are written out in numpy for speed: per frame, scikit-learn's ``kmeans_plusplus`` spent 10-14 ms on
-1,024 primitives and K = 100, nearly all of it validating its inputs once per seed, where the same greedy
-algorithm here takes about 2 ms; a Lloyd pass's distances are one matrix product of the points with a column of
-ones against the centres (``benchmarks/studies/odometry_schedules.py``; the docs' Visual odometry section).
+Both steps are written out in numpy for speed: scikit-learn's ``kmeans_plusplus`` spends nearly all of its time
+per frame validating its inputs once per seed, several times what the same greedy algorithm costs here; a Lloyd
+pass's distances are one matrix product of the points with a column of ones against the centres (measured:
+docs/studies/odometry_constants.md).
 """
 from __future__ import annotations
 
@@ -16,7 +16,7 @@ from dgmm.variants import VARIANTS
 _ROWS, _COLS = np.array([0, 1, 2, 0, 0, 1]), np.array([0, 1, 2, 1, 2, 2])  # the 6 distinct entries of a 3x3
 _LABEL_BLOCK_BYTES = 2**19
 """A Lloyd pass labels the primitives in blocks whose distances take this many bytes: they stay in the CPU's cache
-between the product and the argmin (an fr1/xyz frame, K = 100: 1.7 ms per pass in one block, 1.0 in these)."""
+between the product and the argmin (measured: docs/studies/odometry_constants.md)."""
 _FULL = np.array([[0, 3, 4], [3, 1, 5], [4, 5, 2]])  # each entry of the full 3x3 in those 6
 
 

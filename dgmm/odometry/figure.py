@@ -1,4 +1,4 @@
-"""Fig 6: top-down view of visual-odometry trajectories against the ground truth (paper §V, Fig 6).
+"""Fig 6: top-down view of visual-odometry trajectories against the ground truth (paper §VI-D, Fig 6).
 
 Drawn headless: a :class:`matplotlib.figure.Figure` built without pyplot (Agg canvas when saved), and
 :func:`save_png` writes it with no software or time metadata, so the same trajectories give the same bytes.

@@ -1,4 +1,4 @@
-"""The per-frame model of each odometry method and how two frames' models are registered (paper §V).
+"""The per-frame model of each odometry method and how two frames' models are registered (paper §VI-D).
 
 Methods: ``"gmm-pixels"`` fits a K-component GMM to per-pixel rectangle primitives (:mod:`dgmm.odometry.pixels`)
 and registers with the determinant-free D2D cost; ``"gmm-points"`` does the same with the plain back-projected
@@ -11,9 +11,8 @@ code before that choice is kept as ``"reference"``. Every frame's start is drawn
 Warm start (``warm_iter``): every frame after the first starts from the previous frame's mixture (its starved
 components restarted on the data) and runs ``warm_iter`` iterations. It under-measures the motion: a few EM
 iterations move a component only part of the way its data moved (EM's mean update lags along surfaces that extend
-past the component), so D2D between the previous mixture and its lagging successor sees part of the motion (fr1/xyz,
-20 pairs two frames apart: estimated on true translation slope 0.89 warm, 0.96 from each frame's own start), and
-the shortfall compounds into drift.
+past the component), so D2D between the previous mixture and its lagging successor sees part of the motion, and
+the shortfall compounds into drift (measured: docs/studies/odometry_constants.md).
 """
 from __future__ import annotations
 
@@ -35,24 +34,20 @@ REG_COVAR = 1e-6
 
 EM_BLOCK_BYTES = 2**19
 """Every frame's EM streams its responsibilities in blocks of this many bytes (``GaussianMixture``'s
-``memory_limit``): a frame's (14,415 x 100) responsibilities are 11.5 MB, and EM's passes over half-MiB blocks stay
-in the CPU's cache. Two EM iterations of an fr1/xyz frame on one thread: 29.8 ms in one block, 26.1, 24.8 and 25.8 ms
-in 1 MiB, 512 KiB and 256 KiB blocks."""
+``memory_limit``): a frame's responsibilities (about 14,000 pixels x K = 100) are 11.5 MB, and EM's passes over
+half-MiB blocks stay in the CPU's cache (measured: docs/studies/odometry_constants.md)."""
 
 ROUND_TOL = 1e-4
 """Gauss-Newton's stopping tolerance (pose change in radians and RMS radii) of the cut rounds' registrations, in
-place of the solver's 1e-8; below :data:`CUT_TOL`, which the rounds' pose changes are held to. fr1/xyz (798 frames,
-textbook EM, seed 0): the same ATE to four digits (0.0374 m), 10% less CPU per frame. The registration before the
-rounds, only their start, stops at :data:`CUT_TOL` (seeds 0-2, both EMs: ATE within 0.0003 m, 1 ms less per
-frame)."""
+place of the solver's 1e-8; below :data:`CUT_TOL`, which the rounds' pose changes are held to, so a looser solve
+changes no estimate that the rounds keep and saves CPU. The registration before the rounds, only their start,
+stops at :data:`CUT_TOL` (measured: docs/studies/odometry_constants.md)."""
 
 CUT_TOL = 1e-3
 """Cut rounds stop once a round moves the pose by less (radians, and RMS radii of the moving mixture: 1 mm at
-fr1/xyz's radius of about 1 m; :func:`dgmm.odometry.measured_cut.register_cut_rounds`). fr1/xyz, 798 frames,
-textbook EM, seeds 0-4: ATE 0.0374, 0.0393, 0.0376, 0.0437 and 0.0420 m against 0.0374, 0.0388, 0.0370, 0.0433
-and 0.0409 with all three rounds; the rounds' CPU per frame 24 → 18 ms (with :data:`ROUND_TOL` on the last
-registration too). The rotation-only room keeps every frame within 3 cm (``benchmarks/studies/odometry_rotation_room.py``,
-seeds 0-4, both EMs)."""
+fr1/xyz's radius of about 1 m; :func:`dgmm.odometry.measured_cut.register_cut_rounds`): the ATE stays within the
+seed-to-seed spread of always running all three rounds, for a quarter less of the rounds' CPU (measured on fr1/xyz
+and the rotation-only room: docs/studies/odometry_constants.md)."""
 
 STARVED_WEIGHT = 0.1
 """Warm start: a component of the previous frame's mixture whose weight is below ``STARVED_WEIGHT / K`` restarts."""

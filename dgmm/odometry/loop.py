@@ -1,4 +1,4 @@
-"""The frame-to-frame odometry loop over a TUM RGB-D sequence (paper §V "Visual Odometry"), and its timings.
+"""The frame-to-frame odometry loop over a TUM RGB-D sequence (paper §VI-D "Visual Odometry"), and its timings.
 
 Files and poses follow :mod:`dgmm.odometry.tum` (camera → world, ``x_w = R x_c + t``), the frames' models and
 their registration :mod:`dgmm.odometry.frame_model`. Odometry registers frame ``k+1`` (moving) onto frame ``k``
@@ -84,7 +84,7 @@ class Odometry:
 
 def run_odometry(sequence, method, frames=None, *, intrinsics=FR3, n_components=100, schedule="overlap", warm_iter=None,
                  variant="textbook", size="area", n_icp_points=2500, icp_tol=1e-9, seed=0, callback=None):
-    """Frame-to-frame visual odometry over a TUM sequence (paper §V).
+    """Frame-to-frame visual odometry over a TUM sequence (paper §VI-D).
 
     Each frame's model is built once (a GMM, or ICP's random points) and registered onto the previous frame's
     from the identity; the relative motions are composed into poses.

@@ -14,7 +14,7 @@ from dgmm.errors import InputError
 from dgmm.primitives import Primitives
 
 PIXEL_STEP = 4
-"""Back-project every 4th pixel of every 4th row: 640×480 → 160×120 (paper §V)."""
+"""Back-project every 4th pixel of every 4th row: 640×480 → 160×120 (paper §VI-D)."""
 
 
 # ------------------------------------------------------------------------------------------------ camera
@@ -170,7 +170,7 @@ PIXEL_SIZES = {"area": _area_sizes, "unit": _unit_sizes}
 
 
 def pixel_primitives(depth, intrinsics=FR3, step=PIXEL_STEP, size="area"):
-    """Every ``step``-th pixel as a camera-aligned rectangle primitive (paper §V, the uncertainty primitive).
+    """Every ``step``-th pixel as a camera-aligned rectangle primitive (paper §VI-D, the uncertainty primitive).
 
     The pixel block seen at depth ``Z`` covers ``w_x = step Z / fx`` by ``w_y = step Z / fy`` metres; the
     uniform distribution over that rectangle has covariance ``diag(w_x² / 12, w_y² / 12, 0)`` in the camera frame.

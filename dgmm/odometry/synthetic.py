@@ -1,6 +1,6 @@
 """A synthetic TUM RGB-D sequence: ray-cast depth of a small room along a hand-held-like camera path.
 
-Stands in for TUM fr3/long_office_household (paper §V) where the real sequence is absent, in exactly its
+Stands in for TUM fr3/long_office_household (paper §VI-D) where the real sequence is absent, in exactly its
 format (see ``dgmm.odometry.tum``): ``depth.txt``, ``depth/<timestamp>.png`` (16-bit, metres × 5000, 640×480) and
 ``groundtruth.txt`` at 100 Hz like TUM's motion capture. No RGB images and no ``rgb.txt`` are written; nothing in
 dgmm reads them.

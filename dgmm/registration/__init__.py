@@ -1,4 +1,4 @@
-"""Rigid registration with fitted Gaussian mixtures, point-to-point ICP and CPD (paper §V "Mesh Registration").
+"""Rigid registration with fitted Gaussian mixtures, point-to-point ICP and CPD (paper §VI-A "Mesh Registration").
 
 The public namespace; one concept per module:
 

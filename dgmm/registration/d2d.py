@@ -1,4 +1,4 @@
-"""Distribution-to-distribution (D2D) registration of two mixtures, the determinant-free cost (paper §V, VO).
+"""Distribution-to-distribution (D2D) registration of two mixtures, the determinant-free cost (paper §VI-D, visual odometry).
 
 ``f = -Σᵢⱼ πᵢ πⱼ exp(-½ yᵢⱼᵀ Sᵢⱼ⁻¹ yᵢⱼ)`` with ``Sᵢⱼ = Σᵢ + R Σⱼ Rᵀ`` and ``yᵢⱼ = μᵢ - (R (μⱼ - c) + c + t')``:
 component ``i`` of the fixed mixture, ``j`` of the moving one. The cost is one pass over every pair at once (the
@@ -235,7 +235,7 @@ def d2d_pose_cost(tables):
 
 def register_d2d(fixed, moving, initial_rotation=None, initial_translation=None, gradient="analytic",
                  callback=None, options=None, solver="bfgs"):
-    """Distribution-to-distribution registration of two mixtures, determinant-free cost (paper §V, VO).
+    """Distribution-to-distribution registration of two mixtures, determinant-free cost (paper §VI-D, visual odometry).
 
     Minimises ``-Σᵢⱼ πᵢ πⱼ exp(-½ yᵀ (Σᵢ + R Σⱼ Rᵀ)⁻¹ y)``, ``y = μᵢ - t - R μⱼ``, rotating about the moving
     mixture's weighted centroid.

@@ -120,7 +120,7 @@ def p2d_pose_cost(points, centre, mixture):
 def register_p2d(source, mixture, gradient="analytic", callback=None, options=None, solver="bfgs"):
     """Point-to-distribution registration: maximise the mean log-likelihood of the moved source points.
 
-    From the identity, rotating about the source centroid (paper §V).
+    From the identity, rotating about the source centroid (paper §VI-A).
 
     Parameters
     ----------
