@@ -47,8 +47,13 @@ _EPS = 10.0 * np.finfo(np.float64).eps
 _ROWS = np.array([0, 1, 2, 0, 0, 1])
 _COLS = np.array([0, 1, 2, 1, 2, 2])
 # Bytes of log rho per block when scoring: a block stays in the CPU cache through the normalisation's passes (2x
-# faster than 64k-row blocks at K = 100-400 on 50k points); rows are scored independently, so blocks change no bit.
+# faster than 64k-row blocks at K = 100-400 on 50k points); rows are scored independently, so blocks change no bit
+# (with the padding below).
 _SCORE_BLOCK_BYTES = 1 << 20
+# Scoring products are padded with zero rows to a multiple of this: BLAS computes the rows past the last full tile
+# of a product with other kernels, which round differently on some CPUs (OpenBLAS's Haswell kernels on an AMD EPYC),
+# so a primitive's score would depend on where its block ends; in full tiles every row is computed alike.
+_SCORE_ROW_TILE = 8
 _TABLE_CHUNK = 1 << 16  # rows per block when building a moment table, to bound its (rows, 3, 3) temporaries
 _KMEANS_SAMPLE = 1 << 17  # k-means initialisation runs on at most this many primitives (a random subsample)
 # Floor for log rho − max before exp. exp(−300) ≈ 5e−131 vanishes beside the row's largest term (1) exactly as
@@ -265,16 +270,20 @@ class EStep:
         block of ``_SCORE_BLOCK_BYTES``, with the E-step ``scale`` on each primitive's expected log-density (a
         float, or one per primitive).
 
-        Each block is a view of the (n_rows, n_components) product: BLAS computes each of its rows the same whatever
-        the other rows, which the (n_components, n_rows) product's edge cases do not, so scores do not depend on how
-        the primitives are split.
+        Each block is a view of the (n_rows, n_components) product, its rows padded with zeros to a multiple of
+        ``_SCORE_ROW_TILE`` and every block but the last a multiple of it: BLAS then computes each row the same
+        whatever the other rows, so scores do not depend on how the primitives are split.
         """
         scale = np.broadcast_to(np.asarray(scale, dtype=float), (len(means),))
-        rows = max(1, _SCORE_BLOCK_BYTES // (8 * len(self.coefficients)))
+        tile = _SCORE_ROW_TILE
+        rows = max(tile, _SCORE_BLOCK_BYTES // (8 * len(self.coefficients)) // tile * tile)
         for start in range(0, len(means), rows):
             block = slice(start, start + rows)
-            features = _moment_features(means[block], covariances[block], self.centre, scale[block], self.unit)
-            yield np.dot(features, self.coefficients.T).T
+            count = len(means[block])
+            features = np.zeros((-(-count // tile) * tile, 11))
+            _moment_features(means[block], covariances[block], self.centre, scale[block], self.unit,
+                             out=features[:count])
+            yield np.dot(features, self.coefficients.T)[:count].T
 
     def responsibilities(self, means, covariances, scale=1.0):
         """Responsibilities of the primitives ``(means, covariances)``, shape (n_rows, n_components)."""
