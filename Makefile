@@ -33,7 +33,7 @@ bench: $(STAMP)
 	$(VENV)/bin/python benchmarks/registration_speed.py
 	$(VENV)/bin/python benchmarks/cpd_speed.py
 
-profile: $(STAMP)  # cold sweep of a clone of HEAD in sweep units, per-rule job times (docs/benchmarks.md)
+profile: $(STAMP)  # cold sweep of a clone of HEAD in sweep units, per-rule job times (docs/benchmarks/sweep.md)
 	$(VENV)/bin/python benchmarks/sweep_profile.py --cores $(CORES)
 
 clean:

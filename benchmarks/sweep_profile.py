@@ -21,8 +21,8 @@ so that runs on machines of different speed compare. Steps:
    (inside a job's span but outside its benchmark window: Snakemake starting the script); and the critical
    path, the longest chain of jobs through the DAG, the wall time no number of cores could beat.
 
-Usage: ``python benchmarks/sweep_profile.py [--cores 2] [--keep]`` (``make profile``); it prints the "Sweep profile"
-section of docs/benchmarks.md, ready to paste. ``--workdir DIR`` prints the tables of a run already made in ``DIR``
+Usage: ``python benchmarks/sweep_profile.py [--cores 2] [--keep]`` (``make profile``); it prints the tables of
+docs/benchmarks/sweep.md, ready to paste. ``--workdir DIR`` prints the tables of a run already made in ``DIR``
 (its wall time taken from its first job's start to its last job's end).
 """
 import argparse

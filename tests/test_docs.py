@@ -4,6 +4,7 @@ figures in the site, the API pages name every public name, and no internal link 
 Links are checked on the built HTML by parsing it here (every relative ``href`` and ``src`` must name a file of the
 site and, with a ``#fragment``, an ``id`` in that file), not by trusting Sphinx's own reference resolution.
 """
+import ast
 import importlib
 import os
 import re
@@ -25,6 +26,8 @@ from api_pages import PACKAGES, public_names  # noqa: E402
 SPHINX_BUILD = str(Path(sys.executable).parent / "sphinx-build")
 ONE_THREAD = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}  # as make docs
 MARKDOWN_LINK = re.compile(r"\[[^\]]*\]\(([^)\s]+)\)")
+STATED_CONSTANT = re.compile(r"`(?P<module>dgmm(?:\.\w+)*)\.(?P<name>_?[A-Z][A-Z0-9_]*)` = (?P<value>[-+0-9.e]+\b)")
+MAX_PAGE_BYTES = 30_000
 
 
 class LinksAndIds(HTMLParser):
@@ -113,10 +116,15 @@ def test_api_reference_lists_every_public_name(site):
             assert f'href="generated/{package}.{name}.html' in page, f"{package}.{name} not listed"
 
 
+def markdown_sources():
+    """The README, the docs' markdown pages (not the build's) and the benchmark studies' index."""
+    pages = [path for path in DOCS.rglob("*.md") if not {"_build", "auto_examples"} & set(path.parts)]
+    return [REPO / "README.md", REPO / "benchmarks" / "studies" / "README.md", *sorted(pages)]
+
+
 def test_readme_and_docs_sources_link_to_files_that_exist():
     """Plain markdown links of the README and the docs' pages (read on GitHub as well as in the site)."""
-    sources = [REPO / "README.md", *DOCS.glob("*.md"), *DOCS.glob("user_guide/*.md")]
-    for source in sources:
+    for source in markdown_sources():
         for link in MARKDOWN_LINK.findall(source.read_text(encoding="utf-8")):
             if urlsplit(link).scheme:
                 continue
@@ -126,6 +134,32 @@ def test_readme_and_docs_sources_link_to_files_that_exist():
 
 def test_readme_is_a_front_page():
     assert len((REPO / "README.md").read_bytes()) <= 10_500
+
+
+def test_no_docs_page_is_over_30_kb():
+    for source in markdown_sources():
+        assert len(source.read_bytes()) <= MAX_PAGE_BYTES, f"{source.relative_to(REPO)}"
+
+
+def stated_constants(text):
+    """``(module, name, stated value)`` for every "`dgmm.module.NAME` = value" of a page."""
+    return [(match["module"], match["name"], match["value"]) for match in STATED_CONSTANT.finditer(text)]
+
+
+def test_constants_stated_in_the_docs_are_the_code_s():
+    """A page that gives a constant's value as "`dgmm.module.NAME` = value" gives the value in the code."""
+    stated = [(source, *entry) for source in markdown_sources() for entry in stated_constants(source.read_text())]
+    assert len(stated) >= 5  # docs/studies/odometry_constants.md states five
+    for source, module, name, value in stated:
+        actual = getattr(importlib.import_module(module), name)
+        where = f"{source.relative_to(REPO)}: {module}.{name} = {value}"
+        assert actual == ast.literal_eval(value), f"{where}, not {actual!r}"
+
+
+def test_a_stated_constant_is_read_with_its_module_and_value():
+    text = "the stride `dgmm.odometry.pixels.PIXEL_STEP` = 4 (pixels), `dgmm.em_blocks.CACHE_BLOCK_BYTES` = 8388608."
+    assert stated_constants(text) == [("dgmm.odometry.pixels", "PIXEL_STEP", "4"),
+                                      ("dgmm.em_blocks", "CACHE_BLOCK_BYTES", "8388608")]
 
 
 def test_link_check_finds_missing_files_and_anchors(tmp_path):
