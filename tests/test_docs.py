@@ -197,3 +197,23 @@ def test_configuration_page_documents_every_key():
     for config in ("config.yaml", "tests/config.yaml"):
         for key in keys(yaml.safe_load((REPO / config).read_text())):
             assert f"``{key}``" in page or f"rubric:: {key}" in page, f"{config}: {key} is not on the page"
+
+
+def test_the_odometry_page_describes_the_default_schedule_as_the_code_runs_it():
+    """The user guide's bullet on ``overlap`` (the default of ``run_odometry`` and the sweep) gives the schedule's
+    own numbers."""
+    import inspect
+
+    from dgmm.odometry import SCHEDULES, run_odometry
+
+    default = inspect.signature(run_odometry).parameters["schedule"].default
+    schedule = SCHEDULES[default]
+    words = {1: "one", 2: "two", 3: "three", 4: "four"}
+    bullet = next(line for line in (DOCS / "user_guide" / "odometry.md").read_text().split("\n- ")
+                  if line.startswith(f"`{default}` (the default)"))
+    bullet = " ".join(bullet.split())
+    for phrase in (f"seeds from {schedule.seed_sample:,} primitives",
+                   f"{schedule.lloyd_iter} Lloyd and {schedule.em_iter} EM iterations",
+                   f"widened by {schedule.overlap_scales[0]:g} RMS radii",
+                   f"up to {words[schedule.cut_rounds]} rounds", {"gauss-newton": "Gauss-Newton D2D"}[schedule.solver]):
+        assert phrase in bullet, phrase
