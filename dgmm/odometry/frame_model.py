@@ -243,7 +243,7 @@ MIXTURE_METHODS = ("gmm-pixels", "gmm-points")
 UNSIZED_METHODS = ("gmm-points",)
 """Mixture methods whose primitives all have size 1: every EM variant is the same algorithm there (the authors'
 E-step scale ``alpha / min(alpha)`` is 1 and their unweighted M-step is the textbook one), so they run textbook EM
-only, as the registration's point mixtures do (:func:`dgmm.experiments.trials.method_variants`)."""
+only, as the registration's point mixtures do (``dgmm.experiments.trials.method_variants``)."""
 
 
 def odometry_runs(methods, variants):
