@@ -1,4 +1,4 @@
-"""The paper's registration experiment (§V "Mesh Registration", Fig 5 and Table 1) as plain functions.
+"""The paper's registration experiment (§VI-A "Mesh Registration", Fig 5 and Table 1) as plain functions.
 
 One experiment registers the source points of many random rigid trials back onto one model with several
 methods (:data:`METHODS`). Every method sees the same trials (authors' protocol, leonidk/direct_gmm):

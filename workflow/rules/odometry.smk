@@ -1,4 +1,4 @@
-# Visual odometry (paper §V "Visual Odometry", Fig 6): frame-to-frame odometry of the first odometry.frames depth
+# Visual odometry (paper §VI-D "Visual Odometry", Fig 6): frame-to-frame odometry of the first odometry.frames depth
 # frames of every configured TUM RGB-D sequence that exists (odometry.sequences; missing ones are reported pending)
 # and of the synthetic one (rendered once from the seed into results/odometry/synthetic/sequence/), one job per
 # (sequence, run): a run is a GMM method with an EM variant (gmm-pixels-textbook, gmm-pixels-authors; the plain-point

@@ -5,7 +5,7 @@ One module per experiment, each a plain function a thin job script calls (``work
 - :mod:`~.convergence`: fits run to 100 iterations (Discussion: convergence speed, the 100-iteration comparison) and
   the "fuller model" numbers of Fig 7 (surface coverage by 2σ ellipsoids, spread of the weights);
 - :mod:`~.resampling`: the same mesh with every triangle split in four (§II, invariance to resampling);
-- :mod:`~.optimisers`: P2D with CG beside BFGS and a rotation vector beside the quaternion (§V-A);
+- :mod:`~.optimisers`: P2D with CG beside BFGS and a rotation vector beside the quaternion (§VI-A);
 - :mod:`~.timing`: same-run CPU-time ratios (the area × centroid approximation, determinant-free D2D).
 
 Their tables are deterministic except the timing tables (``*_seconds``), which the report flags as machine

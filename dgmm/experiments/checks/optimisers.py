@@ -1,4 +1,4 @@
-"""P2D with the optimisers and rotation parameters the paper tried (§V, "Mesh Registration").
+"""P2D with the optimisers and rotation parameters the paper tried (§VI-A, "Mesh Registration").
 
 The paper: "we tried both Conjugate Gradients and BFGS ..., which produced similar results and we report the BFGS
 results as it ran faster", and "our experiments using the rotation vector ... produced nearly identical results"

@@ -2,7 +2,7 @@
 
 - The area × centroid approximation (eq. 5), "a fast approximation to our proposed method" (Conclusion): EM on a
   mesh's triangles with and without their covariances, and on its centroids as points, interleaved repeats.
-- "We used the determinant-free method as it was much faster in our re-implementation" (§V, D2D odometry):
+- "We used the determinant-free method as it was much faster in our re-implementation" (§VI-D, D2D odometry):
   BFGS with forward differences (the paper's setup) on the D2D cost with and without the determinant factor,
   between a mesh's mixture and a mixture of its vertices moved by a small rigid motion.
 
