@@ -280,7 +280,8 @@ class EStep:
         for start in range(0, len(means), rows):
             block = slice(start, start + rows)
             count = len(means[block])
-            features = np.zeros((-(-count // tile) * tile, 11))
+            features = np.empty((-(-count // tile) * tile, 11))
+            features[count:] = 0.0
             _moment_features(means[block], covariances[block], self.centre, scale[block], self.unit,
                              out=features[:count])
             yield np.dot(features, self.coefficients.T)[:count].T

@@ -209,11 +209,12 @@ def test_the_odometry_page_describes_the_default_schedule_as_the_code_runs_it():
     default = inspect.signature(run_odometry).parameters["schedule"].default
     schedule = SCHEDULES[default]
     words = {1: "one", 2: "two", 3: "three", 4: "four"}
+    solvers = {"gauss-newton": "Gauss-Newton D2D", "bfgs": "BFGS D2D"}
     bullet = next(line for line in (DOCS / "user_guide" / "odometry.md").read_text().split("\n- ")
                   if line.startswith(f"`{default}` (the default)"))
     bullet = " ".join(bullet.split())
     for phrase in (f"seeds from {schedule.seed_sample:,} primitives",
                    f"{schedule.lloyd_iter} Lloyd and {schedule.em_iter} EM iterations",
                    f"widened by {schedule.overlap_scales[0]:g} RMS radii",
-                   f"up to {words[schedule.cut_rounds]} rounds", {"gauss-newton": "Gauss-Newton D2D"}[schedule.solver]):
+                   f"up to {words[schedule.cut_rounds]} rounds", solvers[schedule.solver]):
         assert phrase in bullet, phrase

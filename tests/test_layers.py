@@ -7,7 +7,6 @@ Every ``import`` and ``from … import`` is read with :mod:`ast`, at module leve
 imports its heavy dependencies lazily), relative ones resolved against the importing module.
 """
 import ast
-from pathlib import Path
 
 import pytest
 
@@ -42,15 +41,12 @@ def imported_names(path, name):
     return names
 
 
-def floor(name):
-    for prefix in (EXPERIMENTS, RUNTIME):
-        if name == prefix or name.startswith(prefix + "."):
-            return prefix
-    return "library"
-
-
 def within(name, prefix):
     return name == prefix or name.startswith(prefix + ".")
+
+
+def floor(name):
+    return next((prefix for prefix in (EXPERIMENTS, RUNTIME) if within(name, prefix)), "library")
 
 
 def layer_violations(root):

@@ -7,8 +7,8 @@ errors against the rendered truth after each round are printed (worst and median
 ``--pair`` alone). Last, the bias of the cut itself: both frames cut at the true motion and registered from it. One
 BLAS thread.
 
-Usage: ``python benchmarks/studies/odometry_cut_rounds.py [--seed 0] [--rounds 5] [--pair 0] [--variants textbook authors]``
-(the room sequence is written once under results/benchmarks, as ``benchmarks/studies/odometry_rotation_room.py`` does).
+Usage: ``python benchmarks/studies/odometry_cut_rounds.py [--seed 0] [--rounds 5] [--pair 0]
+[--variants textbook authors]`` (the room sequence is written once under results/benchmarks, as ``benchmarks/studies/odometry_rotation_room.py`` does).
 """
 import argparse
 import sys

@@ -9,8 +9,8 @@ its camera by ``T`` (its starved components restarted as the warm start does, ``
 one Gauss-Newton D2D. Each frame's own mixture (the schedule's) still serves as the fixed frame of the next pair.
 Prints ATE, one-second RPE and CPU seconds per frame for the schedule alone and with the refit; one thread.
 
-Usage: ``python benchmarks/studies/odometry_shared_refit.py [SEQUENCE_DIR] [--frames 300] [--seed 0] [--variant textbook]
-[--em-iter 2 10] [--cut]``.
+Usage: ``python benchmarks/studies/odometry_shared_refit.py [SEQUENCE_DIR] [--frames 300] [--seed 0]
+[--variant textbook] [--em-iter 2 10] [--cut]``.
 """
 import argparse
 import os

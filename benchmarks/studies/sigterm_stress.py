@@ -6,8 +6,8 @@ data stage (made once) into a fresh directory, starts ``snakemake fits`` on ``--
 have written their scores, sleeps up to ``--delay`` s, sends SIGTERM and waits 60 s: a run still alive then is a
 hang (killed, counted). ``--burn`` runs a CPU-bound process beside the trials (a loaded machine widens the window).
 
-Usage: ``python benchmarks/studies/sigterm_stress.py [--repo CHECKOUT] [--trials 40] [--delay 0.05] [--burn] [--seed 0]``;
-``--repo`` a checkout of an older commit measures the code before.
+Usage: ``python benchmarks/studies/sigterm_stress.py [--repo CHECKOUT] [--trials 40] [--delay 0.05] [--burn]
+[--seed 0]``; ``--repo`` a checkout of an older commit measures the code before.
 """
 import argparse
 import os

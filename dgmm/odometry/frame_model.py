@@ -5,8 +5,8 @@ and registers with the determinant-free D2D cost; ``"gmm-points"`` does the same
 points; ``"icp"`` keeps 2,500 points drawn at random from each frame's back-projection for point-to-point ICP.
 
 Schedules (:data:`SCHEDULES`): the paper does not state how each frame's EM starts or how long it runs, nor its
-odometry's solver, so the sweep's schedule is chosen by measurement (``benchmarks/studies/odometry_schedules.py``) and the
-code before that choice is kept as ``"reference"``. Every frame's start is drawn from its own seed.
+odometry's solver, so the sweep's schedule is chosen by measurement (``benchmarks/studies/odometry_schedules.py``)
+and the code before that choice is kept as ``"reference"``. Every frame's start is drawn from its own seed.
 
 Warm start (``warm_iter``): every frame after the first starts from the previous frame's mixture (its starved
 components restarted on the data) and runs ``warm_iter`` iterations. It under-measures the motion: a few EM

@@ -1,4 +1,4 @@
-"""Distribution-to-distribution (D2D) registration of two mixtures, the determinant-free cost (paper §VI-D, visual odometry).
+"""Distribution-to-distribution (D2D) registration of two mixtures, the determinant-free cost (paper §VI-D, odometry).
 
 ``f = -Σᵢⱼ πᵢ πⱼ exp(-½ yᵢⱼᵀ Sᵢⱼ⁻¹ yᵢⱼ)`` with ``Sᵢⱼ = Σᵢ + R Σⱼ Rᵀ`` and ``yᵢⱼ = μᵢ - (R (μⱼ - c) + c + t')``:
 component ``i`` of the fixed mixture, ``j`` of the moving one. The cost is one pass over every pair at once (the

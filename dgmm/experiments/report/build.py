@@ -319,8 +319,8 @@ def blocks(loaded, drawn):
                "of the points GMM (vertices) and the mesh GMM (triangles); registration errors as % of ICP's mean "
                "error, the mesh GMM's with the paper's P2D (one BFGS from the identity) and, in the last two "
                "columns, with the coarse-to-fine P2D (dgmm.registration.coarse_to_fine: the same mixture, its "
-               "covariances widened and narrowed stage by stage; not in the paper). – : not measured yet. One table per trial "
-               "protocol and EM variant of the mesh GMMs (points GMMs: textbook EM, the same algorithm).")),
+               "covariances widened and narrowed stage by stage; not in the paper). – : not measured yet. One table per "
+               "trial protocol and EM variant of the mesh GMMs (points GMMs: textbook EM, the same algorithm).")),
     ]
     for (protocol, variant), rows in loaded.tables1.items():
         result.append(("p", f"**{TABLE1_SETTINGS[protocol]}; mesh GMMs fitted with {TABLE1_VARIANTS[variant]}**"
