@@ -269,6 +269,33 @@ def test_failed_run_leaves_no_files(tmp_path):
     assert list(tmp_path.iterdir()) == []
 
 
+def _interrupt_after(monkeypatch, owner, name):
+    """Make ``owner.name`` run for real, then raise KeyboardInterrupt: Ctrl-C landing just after a file opened."""
+    real = getattr(owner, name)
+
+    def interrupted(*args, **kwargs):
+        real(*args, **kwargs)
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(owner, name, interrupted)
+
+
+@pytest.mark.parametrize("recorder", [FitRecorder, RegistrationRecorder, OdometryRecorder])
+@pytest.mark.parametrize("opened", ["mcap", "rrd"])
+def test_ctrl_c_while_a_recorder_opens_leaves_no_files(tmp_path, monkeypatch, recorder, opened):
+    """The recorder's constructor never returned, so only the constructor can discard what it opened."""
+    import mcap.writer
+    import rerun
+
+    if opened == "mcap":
+        _interrupt_after(monkeypatch, mcap.writer.Writer, "start")
+    else:
+        _interrupt_after(monkeypatch, rerun.RecordingStream, "save")
+    with pytest.raises(KeyboardInterrupt):
+        recorder(tmp_path / "out.mcap", tmp_path / "out.rrd")
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_recorder_needs_a_seed(tmp_path):
     with FitRecorder(tmp_path / "fit.mcap") as recorder:
         with pytest.raises(InputError, match="begin_seed"):

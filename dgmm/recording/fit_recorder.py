@@ -47,9 +47,9 @@ class FitRecorder(Recording):
         self._seed = None
         self._started = None
         self._rerun_seed = None
-        self._mcap = McapWriter(mcap_path)
-        self._rerun = None
-        try:
+        self._mcap = self._rerun = None
+        try:  # Ctrl-C at any point of this leaves no file behind
+            self._mcap = McapWriter(mcap_path)
             self._mcap.write("/fit/params", params or {}, FIT_PARAMS_SCHEMA)
             if rrd_path is not None:
                 self._rerun = RerunRecorder(rrd_path, n_sigma=n_sigma)

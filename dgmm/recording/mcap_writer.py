@@ -48,9 +48,14 @@ class McapWriter(Output):
     def __init__(self, path):
         self.path = Path(path)
         self._temporary = temporary_path(self.path)
-        self._stream = open(self._temporary, "wb")
-        self._writer = Writer(self._stream)
-        self._writer.start(profile="", library="dgmm")
+        self._stream = None
+        try:  # an interrupt before __init__ returns would leave the caller nothing to abort
+            self._stream = open(self._temporary, "wb")
+            self._writer = Writer(self._stream)
+            self._writer.start(profile="", library="dgmm")
+        except BaseException:
+            self.abort()
+            raise
         self._schema_ids = {}
         self._channels = {}
         self._n_messages = 0
@@ -113,5 +118,6 @@ class McapWriter(Output):
 
     def abort(self):
         """Discard the file."""
-        self._stream.close()
+        if self._stream is not None:
+            self._stream.close()
         self._temporary.unlink(missing_ok=True)

@@ -68,9 +68,9 @@ class OdometryRecorder(Recording):
             self._anchor = (np.eye(3), np.zeros(3))
         self._path = []
         self._last_time = 0
-        self._mcap = McapWriter(mcap_path)
-        self._rerun = None
-        try:
+        self._mcap = self._rerun = None
+        try:  # Ctrl-C at any point of this leaves no file behind
+            self._mcap = McapWriter(mcap_path)
             start = 0 if groundtruth is None or not len(groundtruth) else _ns(groundtruth.timestamps[0])
             self._mcap.write("/odometry/params", params or {}, ODOMETRY_PARAMS_SCHEMA, start)
             if rrd_path is not None:

@@ -27,7 +27,8 @@ class Recording(Output):
             self._rerun.close()
 
     def abort(self):
-        """Discard both files."""
-        self._mcap.abort()
+        """Discard both files (either may not have been opened yet)."""
+        if self._mcap is not None:
+            self._mcap.abort()
         if self._rerun is not None:
             self._rerun.abort()

@@ -60,9 +60,9 @@ class RegistrationRecorder(Recording):
         self.n_sigma = n_sigma
         self.recorded_trials = frozenset(int(index) for index in recorded_trials)
         self._trial = None
-        self._mcap = McapWriter(mcap_path)
-        self._rerun = None
-        try:
+        self._mcap = self._rerun = None
+        try:  # Ctrl-C at any point of this leaves no file behind
+            self._mcap = McapWriter(mcap_path)
             self._mcap.write("/registration/params", params or {}, REGISTRATION_PARAMS_SCHEMA)
             if mixture is not None:
                 self._mcap.write("/registration/mixture", ellipsoid_scene_update(

@@ -48,7 +48,11 @@ class RerunRecorder(Output):
         self._stream = rr.RecordingStream(application_id, recording_id=recording_id or self.path.stem,
                                           send_properties=False)
         self._stream.set_log_time_enabled(False)
-        self._stream.save(self._temporary, default_blueprint=blueprint or fit_blueprint())
+        try:  # an interrupt before __init__ returns would leave the caller nothing to abort
+            self._stream.save(self._temporary, default_blueprint=blueprint or fit_blueprint())
+        except BaseException:
+            self.abort()
+            raise
 
     def log_input(self, data):
         """Log the fitted input once, as static data.
