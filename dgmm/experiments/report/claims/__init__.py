@@ -1,17 +1,26 @@
 """The paper's claims, one function each, grouped by the paper's sections; each grades its claim with both EMs.
 
-Modules: :mod:`~.theory` (§II-III, Fig 2), :mod:`~.fitting` (§IV-A, Fig 3, Fig 7), :mod:`~.decimation` (§IV-B,
-Fig 4, Discussion), :mod:`~.convergence` (Discussion, Introduction, Conclusion), :mod:`~.registration` (§V-A/B,
-Fig 5), :mod:`~.table1` (§V-C, Table 1), :mod:`~.odometry` (§V-D, Fig 6). The verdicts, rules and EM policy are in
-:mod:`~.rules`; what the claims read in :mod:`~.measurements`.
+Modules: :mod:`~.theory` (§II, §III, §V-A, §VII: Fig 2 and the identities), :mod:`~.fitting` (§IV-A, Fig 3,
+Fig 7), :mod:`~.decimation` (§IV-B, §IV-C, Fig 4), :mod:`~.convergence` (§I, §IV-C, §VII), :mod:`~.registration`
+(§VI-A, §VI-B, Fig 5), :mod:`~.table1` (§VI-C, Table 1), :mod:`~.odometry` (§VI-D, Fig 6). The rule kinds and
+verdicts are in :mod:`~.grading`; what a claim holds and the EM policy in :mod:`~.rules`; what the claims read in
+:mod:`~.measurements`.
 """
-from dgmm.experiments.report.claims import convergence, decimation, fitting, odometry, registration, table1, theory
-from dgmm.experiments.report.claims.measurements import TABLES, Measurements
-from dgmm.experiments.report.claims.rules import (CLOSE_NATS, FIG3_INPUTS, FIG4_INPUTS, HEADLINE, NOT, PARTLY, PENDING,
-                                                  REPRODUCED, SAME_NATS, VARIANT_NAMES, VARIANTS, Claim, Grade,
-                                                  gap_verdict, share_verdict)
+from importlib import import_module
 
-SECTIONS = (theory, fitting, decimation, convergence, registration, table1, odometry)
+from dgmm.experiments.report.claims.grading import (NOT, PARTLY, PENDING, REPRODUCED, RULE_KINDS, TIMING_NOISE,
+                                                    VERDICTS, Grade)
+from dgmm.experiments.report.claims.measurements import TABLES, Measurements
+from dgmm.experiments.report.claims.rules import FIG3_INPUTS, FIG4_INPUTS, HEADLINE, VARIANT_NAMES, VARIANTS, Claim
+
+MODULES = ("theory", "fitting", "decimation", "convergence", "registration", "table1", "odometry")
+SECTIONS = []
+for _name in MODULES:  # TEMPORARY while the modules move to the grading framework: skip those not moved yet
+    try:
+        SECTIONS.append(import_module(f"{__name__}.{_name}"))
+    except ImportError:
+        pass
+SECTIONS = tuple(SECTIONS)
 CLAIMS = tuple(claim for module in SECTIONS for claim in module.CLAIMS)
 
 
@@ -20,6 +29,6 @@ def evaluate(data):
     return [claim(data) for claim in CLAIMS]
 
 
-__all__ = ["CLAIMS", "CLOSE_NATS", "Claim", "FIG3_INPUTS", "FIG4_INPUTS", "Grade", "HEADLINE", "Measurements", "NOT",
-           "PARTLY", "PENDING", "REPRODUCED", "SAME_NATS", "SECTIONS", "TABLES", "VARIANTS", "VARIANT_NAMES",
-           "evaluate", "gap_verdict", "share_verdict"]
+__all__ = ["CLAIMS", "Claim", "FIG3_INPUTS", "FIG4_INPUTS", "Grade", "HEADLINE", "Measurements", "NOT", "PARTLY",
+           "PENDING", "REPRODUCED", "RULE_KINDS", "SECTIONS", "TABLES", "TIMING_NOISE", "VARIANTS", "VARIANT_NAMES",
+           "VERDICTS", "evaluate"]

@@ -2,7 +2,10 @@
 from dataclasses import dataclass
 from functools import cached_property
 
+from collections import defaultdict
+
 from dgmm.experiments.report import tables
+from dgmm.experiments.report.claims.grading import estimate
 
 TABLES = {
     # field: the table (under results/tables/) it holds as rows of strings
@@ -17,6 +20,7 @@ TABLES = {
     "optimisers": "optimisers.csv",
     "optimisers_seconds": "optimisers_seconds.csv",
     "timing_seconds": "timing_seconds.csv",
+    "identities": "identities.csv",
 }
 
 
@@ -35,11 +39,21 @@ class Measurements:
     optimisers: list = None
     optimisers_seconds: list = None
     timing_seconds: list = None
+    identities: list = None
 
     @cached_property
     def means(self):
         """:func:`dgmm.experiments.report.tables.likelihood_means` of ``likelihood`` ({} when it is missing)."""
         return tables.likelihood_means(self.likelihood) if self.likelihood else {}
+
+    @cached_property
+    def estimates(self):
+        """``(model, input, variant, init, K) -> Estimate``: the mean evaluation log-likelihood over seeds with its
+        standard error ({} when likelihood.csv is missing)."""
+        groups = defaultdict(list)
+        for row in self.likelihood or []:
+            groups[(row["model"], row["input"], row["variant"], row["init"], int(row["K"]))].append(row["eval_ll"])
+        return {key: estimate([float(value) for value in values]) for key, values in sorted(groups.items())}
 
     def errors(self, variant):
         """Registration errors of the scaled trials with mesh mixtures of ``variant`` (None: not configured)."""
@@ -49,3 +63,17 @@ class Measurements:
     def table1(self, variant):
         """Table 1 (scaled trials) with mesh mixtures of ``variant``."""
         return tables.table1(self.means, self.errors(variant), variant)
+
+    def seconds(self, check):
+        """``setting -> {repeat: CPU seconds}`` of one timing check of timing_seconds.csv ({} when missing)."""
+        result = defaultdict(dict)
+        for row in self.timing_seconds or []:
+            if row["check"] == check:
+                result[row["setting"]][int(row["repeat"])] = float(row["seconds"])
+        return dict(result)
+
+    def time_ratios(self, check, numerator, denominator):
+        """Per-repeat ratios ``numerator / denominator`` of one timing check, paired by repeat (() when missing)."""
+        seconds = self.seconds(check)
+        top, bottom = seconds.get(numerator, {}), seconds.get(denominator, {})
+        return tuple(top[repeat] / bottom[repeat] for repeat in sorted(top.keys() & bottom.keys()))

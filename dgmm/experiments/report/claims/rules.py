@@ -1,38 +1,20 @@
-"""The claims' shared vocabulary: verdicts, the two kinds of rule, the EM policy, and what a graded claim holds.
+"""What a graded claim holds, the EM policy, and the helpers the claims share to read the sweep's tables.
 
-Verdicts are ``reproduced``, ``partly``, ``not reproduced`` or ``pending`` (a table the claim needs is missing).
-Most rules are one of two kinds, stated with every claim in the report:
-
-- a *gap* rule: a difference in nats is within ``SAME_NATS`` (reproduced) or ``CLOSE_NATS`` (partly);
-- a *share* rule: the claim holds in at least ``MOST`` of the comparisons it makes (reproduced), at least half
-  (partly), or fewer (not reproduced). Claims the paper words with "often" use ``OFTEN``.
-
-EM policy: every claim is graded twice, once on the mixtures of textbook EM (the paper's equations 11-13) and once
-on those of the authors' published EM (leonidk/direct_gmm: its E-step scales each primitive's Mahalanobis-plus-trace
-term by its area over the smallest area and its M-step does not weight by area; it produced the paper's numbers).
-Point inputs are fitted by both alike (textbook EM). The headline verdict is the authors' EM's (``HEADLINE``): a
-reproduction first asks whether what the authors ran gives what they report; the textbook column says whether the
-method as the paper writes it does too. Claims that involve no mixture fitted to a mesh get one verdict in both.
+Verdicts and rule kinds are defined once in :mod:`~.grading`. EM policy: every claim is graded twice, once on the
+mixtures of textbook EM (the paper's equations 11-13) and once on those of the authors' published EM
+(leonidk/direct_gmm: its E-step scales each primitive's Mahalanobis-plus-trace term by its area over the smallest
+area and its M-step does not weight by area; it produced the paper's numbers). Point inputs are fitted by both alike
+(textbook EM). The headline verdict is the authors' EM's (``HEADLINE``): a reproduction first asks whether what the
+authors ran gives what they report; the textbook column says whether the method as the paper writes it does too.
+Claims that involve no mixture fitted to a mesh get one verdict in both.
 """
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from dgmm.experiments.report.claims.grading import PENDING, REPRODUCED, Grade, TimeRatio, grade_time
 from dgmm.experiments.sweep import SIZED, parse_input
 
-SAME_NATS = 0.1
-"""Two mean log-likelihoods this close (nats per evaluation point) count as equal."""
-CLOSE_NATS = 0.5
-"""... and this close as about equal (half a nat: less than the gap between mesh and point fits in Fig 3)."""
-ROBUST_NATS = 0.25
-"""A fit is robust to initialisation at a K when k-means and random starts end this close (nats)."""
-MOST = 0.9
-"""Share of comparisons a claim must win to count as reproduced (at least half: partly)."""
-OFTEN = 0.5
-"""Share a claim worded "often" must win to count as reproduced (at least a quarter: partly)."""
-
-REPRODUCED, PARTLY, NOT, PENDING = "reproduced", "partly", "not reproduced", "pending"
 VARIANTS = ("authors", "textbook")
 HEADLINE = "authors"
 VARIANT_NAMES = {"authors": "authors' EM", "textbook": "textbook EM"}
@@ -41,31 +23,11 @@ FIG3_MODEL = "bunny"
 FIG3_INPUTS = ("res4-exact", "res4-approx", "res4-centroids", "res4-vertices")
 FIG4_INPUTS = ("quadric1000-exact", "clustering1000-exact", "poisson1000-points", "random1000-points")
 
-GAP_RULE = (f"gap rule: |difference| ≤ {SAME_NATS} nat reproduced, ≤ {CLOSE_NATS} nat partly, "
-            "larger not reproduced")
-SHARE_RULE = f"share rule: holds in ≥ {MOST:.0%} of comparisons reproduced, ≥ 50% partly, fewer not reproduced"
-OFTEN_RULE = (f"share rule for \"often\": holds in ≥ {OFTEN:.0%} of comparisons reproduced, ≥ 25% partly, fewer "
-              "not reproduced")
-MACHINE = "a time ratio measured within one run: it changes with the machine and its load"
 
-
-@dataclass(frozen=True)
-class Grade:
-    """One EM's verdict on a claim.
-
-    Attributes
-    ----------
-    verdict : str
-        ``REPRODUCED``, ``PARTLY``, ``NOT`` or ``PENDING``.
-    ours : str
-        The number that decides it (short, for the summary table).
-    why : str
-        When not reproduced: the measured cause, one sentence; when pending: what is missing.
-    """
-
-    verdict: str
-    ours: str = ""
-    why: str = ""
+TEXT = "the paper's text"
+NOTEBOOK = "the authors' notebooks (not in the paper's text; its figure is an image)"
+WORDS = "the paper's words"
+"""Where a paper value comes from (``Claim.source``)."""
 
 
 @dataclass(frozen=True)
@@ -75,28 +37,39 @@ class Claim:
     Attributes
     ----------
     section : str
-        Where the paper makes it ("Fig 3", "§V-A", "Table 1", ...); a "Fig n" or "Table n" links to it.
+        The paper's section that makes it ("§IV-A", "§VI-C", "§VII").
+    figure : str
+        The figure or table it is about ("Fig 3", "Table 1"), or "" for none; the report places it there.
     title : str
         The claim, in the paper's words where possible.
     rule : str
-        How a verdict follows from the evidence.
+        The rule kind it is graded by and its margin, one line (kinds: :data:`~.grading.RULE_KINDS`).
     evidence : str
-        Our numbers (Markdown).
+        Our numbers (Markdown); none for a timing claim, whose numbers are in ``timings``.
     grades : dict
         ``variant -> Grade`` for every variant of ``VARIANTS``.
     paper : str
         The paper's number or words the deciding number stands beside.
-    machine_dependent : bool
-        A timing claim: its numbers are CPU-time ratios of one run.
+    source : str
+        Where the paper value comes from: ``TEXT``, ``NOTEBOOK`` or ``WORDS``.
+    timings : str
+        A timing claim's numbers of this run (they go to the report's timing block); "" for other claims.
     """
 
     section: str
+    figure: str
     title: str
     rule: str
     evidence: str
     grades: dict = field(default_factory=dict)
     paper: str = ""
-    machine_dependent: bool = False
+    source: str = WORDS
+    timings: str = ""
+
+    @property
+    def machine_dependent(self):
+        """Whether it is a timing claim (its numbers change with the machine and the run)."""
+        return bool(self.timings)
 
     @property
     def verdict(self):
@@ -111,28 +84,6 @@ class Claim:
         if len(set(causes.values())) == 1 and len(causes) == len(VARIANTS):
             return next(iter(causes.values()))
         return "\n".join(f"{VARIANT_NAMES[v]}: {why}" for v, why in causes.items())
-
-
-def gap_verdict(gap):
-    """Verdict of a gap rule on ``|gap|`` in nats."""
-    return REPRODUCED if abs(gap) <= SAME_NATS else PARTLY if abs(gap) <= CLOSE_NATS else NOT
-
-
-def share_verdict(wins, total, most=MOST, half=0.5):
-    """Verdict of a share rule: ``wins`` of ``total`` comparisons (``total`` > 0) hold."""
-    share = wins / total
-    return REPRODUCED if share >= most else PARTLY if share >= half else NOT
-
-
-def often_verdict(wins, total):
-    """Verdict of a share rule for a claim worded "often"."""
-    return share_verdict(wins, total, OFTEN, OFTEN / 2)
-
-
-def ratio_verdict(ratio, reproduced, partly):
-    """Verdict of a ratio that must lie in the interval ``reproduced`` (else ``partly``, else not reproduced)."""
-    inside = lambda interval: interval[0] <= ratio <= interval[1]  # noqa: E731
-    return REPRODUCED if inside(reproduced) else PARTLY if inside(partly) else NOT
 
 
 def same(grade):
@@ -169,22 +120,14 @@ def per_variant(grade):
     return grades, lines
 
 
-def pending(section, title, rule, what, paper="", machine_dependent=False):
+def pending(section, figure, title, rule, what, paper="", source=WORDS):
     """A claim waiting for data: ``what`` names the missing table or run."""
-    return Claim(section, title, rule, f"waiting for data: {what}.", same(missing(what)), paper, machine_dependent)
+    return Claim(section, figure, title, rule, f"waiting for data: {what}.", same(missing(what)), paper, source)
 
 
 def sentence(text):
     """``text`` as a sentence: first letter upper case, a final full stop ("" stays "")."""
     return f"{text[0].upper()}{text[1:]}." if text else ""
-
-
-def lost(comparisons, limit=3):
-    """``why`` of a share rule: the first ``limit`` comparisons that did not hold, as one sentence."""
-    if not comparisons:
-        return ""
-    more = f" and {len(comparisons) - limit} more" if len(comparisons) > limit else ""
-    return "Fails where " + "; ".join(comparisons[:limit]) + more + "."
 
 
 def fitted_variant(input_name, variant):
@@ -197,26 +140,28 @@ def is_mesh(input_name):
     return parse_input(input_name)[1] in SIZED
 
 
-def cells(means, model, inputs, variant):
-    """``(init, K) -> {input: mean}`` for ``model``'s ``inputs`` with mesh inputs fitted by ``variant``."""
+def cells(estimates, model, inputs, variant):
+    """``(init, K) -> {input: Estimate}`` for ``model``'s ``inputs`` with mesh inputs fitted by ``variant``
+    (``estimates``: :attr:`~.measurements.Measurements.estimates`)."""
     result = {}
-    for (row_model, input_name, row_variant, init, k), (mean, _) in means.items():
+    for (row_model, input_name, row_variant, init, k), value in estimates.items():
         if row_model == model and input_name in inputs and row_variant == fitted_variant(input_name, variant):
-            result.setdefault((init, k), {})[input_name] = mean
+            result.setdefault((init, k), {})[input_name] = value
     return dict(sorted(result.items()))
 
 
-def init_gaps(means, model, inputs, variant):
-    """``(input, K) -> kmeans − random`` for the ``inputs`` fitted from both starts."""
-    table = cells(means, model, inputs, variant)
+def init_gaps(estimates, model, inputs, variant):
+    """``(input, K) -> kmeans − random`` (an Estimate) for the ``inputs`` fitted from both starts."""
+    table = cells(estimates, model, inputs, variant)
     return {(name, k): cell[name] - table[("random", k)][name]
             for (init, k), cell in table.items() if init == "kmeans"
             for name in inputs if name in cell and name in table.get(("random", k), {})}
 
 
 def best(cell, names):
-    """Highest mean among ``names`` in a cell (−inf when none was fitted)."""
-    return max((cell[name] for name in names if name in cell), default=-math.inf)
+    """``(name, Estimate)`` of the highest mean among ``names`` in a cell (None when none was fitted)."""
+    fitted = [(name, cell[name]) for name in names if name in cell]
+    return max(fitted, key=lambda item: item[1].value, default=None)
 
 
 def median(values):
@@ -225,3 +170,36 @@ def median(values):
 
 def mean(values):
     return float(np.mean(values))
+
+
+MIN_REPEATS = 6
+"""Fewest repeats a timing claim needs: below it no 95% interval of a median exists."""
+
+
+def timing_claim(data, section, figure, title, check, ratio, target, paper, source=WORDS, cause=""):
+    """A claim graded by the time-ratio rule on one check of timing_seconds.csv.
+
+    Parameters
+    ----------
+    check : str
+        The timing check (``check`` column).
+    ratio : tuple of str
+        ``(numerator, denominator)`` settings of the check.
+    target : tuple of float
+        ``(low, high)``: the range the claim puts the ratio in.
+    cause : str
+        Why, when the verdict is not reproduced: a cause that holds whatever the run's numbers (no numbers).
+    """
+    low, high = target
+    bound = f"< {high:g}" if low == 0 else f"> {low:g}" if high == float("inf") else f"in [{low:g}, {high:g}]"
+    rule = f"time ratio: {ratio[0]} / {ratio[1]} CPU seconds per repeat ({check} check) {bound}"
+    ratios = data.time_ratios(check, *ratio)
+    if len(ratios) < MIN_REPEATS:
+        return pending(section, figure, title, rule, f"timing_seconds.csv with at least {MIN_REPEATS} repeats of "
+                       f"the {check} check (config section `checks.timing`)", paper, source)
+    measured = TimeRatio(ratios, low, high)
+    seconds = {setting: float(np.median(list(by_repeat.values()))) for setting, by_repeat in
+               data.seconds(check).items()}
+    timings = f"{ratio[0]} / {ratio[1]}: {measured}; median CPU time " + ", ".join(
+        f"{setting} {value * 1000:.3g} ms" for setting, value in seconds.items())
+    return Claim(section, figure, title, rule, "", same(grade_time(measured, cause)), paper, source, timings)

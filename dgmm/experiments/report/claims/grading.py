@@ -1,0 +1,299 @@
+"""The grading framework: each claim's verdict follows from one of four rule kinds, each defined here once.
+
+- **comparison**: one number of ours against another, in the direction the claim states, with a *tie band* from
+  the measured noise of the two (twice the standard error of their difference). Beyond the band it is won or lost;
+  inside it, tied, and a tie counts neither way.
+- **share**: a claim's comparisons counted under the paper's quantifier (:data:`QUANTIFIERS`). Universal words
+  ("every", "always", "never") need every untied comparison won; a plain comparative ("A fits better than B") allows
+  one loss in ten; "often" needs half of all the comparisons. "Partly" needs evidence beyond chance: a one-sided
+  sign test at 5% over the untied comparisons, never a coin flip.
+- **equivalence**: a number within a stated margin of a target (the paper's value, zero, a ratio's 1): each is a
+  comparison whose margin is the distance left to the edge, and its claim a share of them.
+- **time ratio**: CPU-time ratios of interleaved repeats; their median's 95% interval (order statistics, no
+  assumption on the distribution) must clear the claim's threshold for a verdict, else the claim is *within timing
+  noise*: a rerun could flip it, so it gets no verdict.
+"""
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.stats import binom, binomtest
+
+REPRODUCED, PARTLY, NOT, TIMING_NOISE, PENDING = ("reproduced", "partly", "not reproduced", "within timing noise",
+                                                   "pending")
+VERDICTS = (REPRODUCED, PARTLY, NOT, TIMING_NOISE, PENDING)
+WIN, TIE, LOSS = "won", "tied", "lost"
+
+BAND_ERRORS = 2.0
+"""A tie band is this many standard errors of the difference compared (about a 95% band)."""
+ALPHA = 0.05
+"""Level of the one-sided sign test that "partly" needs, and one minus the timing interval's coverage."""
+PLAIN_SHARE = 0.9
+"""Share of the untied comparisons a plain comparative must win."""
+OFTEN, SOMETIMES = 0.5, 0.25
+"""Shares of all comparisons that "often" needs for reproduced and for partly."""
+BOOTSTRAP = 1000
+"""Resamples of the paired bootstrap that gives a statistic's standard error over registration trials."""
+
+
+@dataclass(frozen=True)
+class Comparison:
+    """One comparison a claim makes.
+
+    Attributes
+    ----------
+    label : str
+        Where it is made ("kmeans K=25", "armadillo rotation").
+    margin : float
+        How far it goes the claim's way (> 0 supports the claim), in the compared quantity's unit.
+    band : float
+        Its tie band: ``|margin| <= band`` is a tie.
+    detail : str
+        The numbers compared, for the evidence ("exact 7.62 vs centroids 7.70").
+    """
+
+    label: str
+    margin: float
+    band: float = 0.0
+    detail: str = ""
+
+    @property
+    def outcome(self):
+        """``WIN``, ``TIE`` or ``LOSS``."""
+        return WIN if self.margin > self.band else LOSS if self.margin < -self.band else TIE
+
+    def __str__(self):
+        return f"{self.label}: {self.detail}" if self.detail else self.label
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """A measured number and its standard error; differences carry the error of both sides."""
+
+    value: float
+    error: float = 0.0
+
+    def __sub__(self, other):
+        return Estimate(self.value - other.value, math.hypot(self.error, other.error))
+
+    def __neg__(self):
+        return Estimate(-self.value, self.error)
+
+    def __format__(self, spec):
+        return format(self.value, spec)
+
+
+def estimate(values):
+    """Mean of ``values`` with its standard error (sample standard deviation over √n; 0 for one value)."""
+    values = np.asarray(values, dtype=float)
+    error = float(np.std(values, ddof=1) / np.sqrt(len(values))) if len(values) > 1 else 0.0
+    return Estimate(float(np.mean(values)), error)
+
+
+def compare(label, difference, *, higher=True, band=None, detail=""):
+    """Comparison of a claim that ``difference`` (ours − other) is above zero (``higher``) or below it.
+
+    ``difference`` is an :class:`Estimate`, whose tie band is :data:`BAND_ERRORS` of its standard errors, or a
+    number with an explicit ``band``.
+    """
+    if isinstance(difference, Estimate):
+        value, band = difference.value, BAND_ERRORS * difference.error if band is None else band
+    else:
+        value, band = float(difference), 0.0 if band is None else band
+    return Comparison(label, value if higher else -value, band, detail)
+
+
+def within(label, value, target, margin, *, detail=""):
+    """Equivalence: ``value`` within ``margin`` of ``target`` (won inside, lost outside; no tie zone: the margin
+    already holds the noise)."""
+    return Comparison(label, margin - abs(value - target), 0.0, detail)
+
+
+def versus_paper(label, ours, published, decimals, *, detail=""):
+    """Equivalence of ``ours`` (an :class:`Estimate`) with a published value printed to ``decimals`` places: within
+    the tie band of a difference of two such estimates (the paper's taken to have our standard error: the same
+    protocol and seeds) plus half the paper's last printed digit."""
+    margin = BAND_ERRORS * math.sqrt(2.0) * ours.error + 0.5 * 10.0 ** -decimals
+    return within(label, ours.value, published, margin,
+                  detail=detail or f"ours {ours.value:.{decimals + 1}f}, paper {published:.{decimals}f}")
+
+
+def paired_difference(first, second, statistic=np.mean, seed=0):
+    """``statistic(first) − statistic(second)`` over paired samples (the same registration trials), with its
+    standard error from a seeded paired bootstrap of the pairs."""
+    first, second = np.asarray(first, dtype=float), np.asarray(second, dtype=float)
+    picks = np.random.default_rng(seed).integers(0, len(first), size=(BOOTSTRAP, len(first)))
+    resampled = statistic(first[picks], axis=1) - statistic(second[picks], axis=1)
+    return Estimate(float(statistic(first) - statistic(second)), float(np.std(resampled, ddof=1)))
+
+
+@dataclass(frozen=True)
+class Tally:
+    """A claim's comparisons counted: won, tied and lost, with the sign test over the untied ones."""
+
+    comparisons: tuple
+
+    def of(self, outcome):
+        return [c for c in self.comparisons if c.outcome == outcome]
+
+    @property
+    def counts(self):
+        return tuple(len(self.of(outcome)) for outcome in (WIN, TIE, LOSS))
+
+    @property
+    def sign_test(self):
+        """One-sided p-value of the wins among the untied comparisons under a fair coin (1 when none)."""
+        wins, _, losses = self.counts
+        return float(binomtest(wins, wins + losses, 0.5, alternative="greater").pvalue) if wins + losses else 1.0
+
+    def beyond_chance(self):
+        return self.sign_test < ALPHA
+
+    def __str__(self):
+        wins, ties, losses = self.counts
+        return f"{wins} won, {ties} tied, {losses} lost"
+
+
+@dataclass(frozen=True)
+class Quantifier:
+    """How the paper's words count a claim's comparisons.
+
+    Attributes
+    ----------
+    name : str
+        ``"every"``, ``"plain"`` or ``"often"``.
+    words : str
+        The paper's words it stands for.
+    rule : str
+        The rule, as the report states it.
+    """
+
+    name: str
+    words: str
+    rule: str
+
+    def verdict(self, tally):
+        """Verdict of a :class:`Tally` of at least one comparison."""
+        wins, ties, losses = tally.counts
+        if self.name == "often":
+            total = wins + ties + losses
+            return REPRODUCED if wins >= OFTEN * total else PARTLY if wins >= SOMETIMES * total else NOT
+        allowed = 0 if self.name == "every" else (1 - PLAIN_SHARE) * (wins + losses)
+        if wins and losses <= allowed:
+            return REPRODUCED
+        return PARTLY if tally.beyond_chance() else NOT
+
+
+EVERY = Quantifier("every", "every, all, always, never", "reproduced when every untied comparison is won (at least "
+                   "one); partly when the wins are beyond chance (sign test); else not reproduced")
+PLAIN = Quantifier("plain", "a plain comparative, usually, largely", f"reproduced when at least {PLAIN_SHARE:.0%} of the "
+                  "untied comparisons are won; partly when the wins are beyond chance (sign test); else not "
+                  "reproduced")
+OFTEN_WORDS = Quantifier("often", "often", f"reproduced when at least {OFTEN:.0%} of all comparisons are won, partly "
+                         f"at {SOMETIMES:.0%}; else not reproduced")
+QUANTIFIERS = (EVERY, PLAIN, OFTEN_WORDS)
+
+
+def median_interval(values, alpha=ALPHA):
+    """Median of ``values`` and its distribution-free ``1 − alpha`` interval: the ``k``-th order statistic from
+    either end, ``k`` the largest with ``P(Binomial(n, ½) < k) ≤ alpha / 2`` (at least 1: below 6 values the
+    interval is the whole range, which covers less than ``1 − alpha``)."""
+    ordered = np.sort(np.asarray(values, dtype=float))
+    n = len(ordered)
+    k = 1
+    while k < n // 2 and binom.cdf(k, n, 0.5) <= alpha / 2:
+        k += 1
+    return float(np.median(ordered)), (float(ordered[k - 1]), float(ordered[n - k]))
+
+
+def time_verdict(interval, low=0.0, high=math.inf):
+    """Verdict of a time ratio whose interval is ``interval`` for a claim that it lies in ``[low, high]``:
+    reproduced inside, not reproduced outside, within timing noise across an edge."""
+    lower, upper = interval
+    if low <= lower and upper <= high:
+        return REPRODUCED
+    if upper < low or lower > high:
+        return NOT
+    return TIMING_NOISE
+
+
+@dataclass(frozen=True)
+class Grade:
+    """One EM's verdict on a claim.
+
+    Attributes
+    ----------
+    verdict : str
+        One of :data:`VERDICTS`.
+    ours : str
+        What decides it, short, for the summary table (no timing numbers: those change from run to run).
+    why : str
+        When not reproduced: the measured cause, one sentence; when pending: what is missing.
+    """
+
+    verdict: str
+    ours: str = ""
+    why: str = ""
+
+
+def grade_share(comparisons, quantifier, cause=""):
+    """Grade of a share rule: ``comparisons`` counted under ``quantifier``; ``cause`` is kept when the verdict is
+    not reproduced."""
+    tally = Tally(tuple(comparisons))
+    wins, ties, losses = tally.counts
+    verdict = quantifier.verdict(tally)
+    ours = f"{wins}/{wins + ties + losses} won" + (f", {ties} tied" if ties else "")
+    return Grade(verdict, ours, "" if verdict == REPRODUCED else cause)
+
+
+@dataclass(frozen=True)
+class TimeRatio:
+    """A time ratio from interleaved repeats: its median, its interval and the claim's range for it."""
+
+    ratios: tuple
+    low: float = 0.0
+    high: float = math.inf
+
+    @property
+    def median(self):
+        return median_interval(self.ratios)[0]
+
+    @property
+    def interval(self):
+        return median_interval(self.ratios)[1]
+
+    @property
+    def verdict(self):
+        return time_verdict(self.interval, self.low, self.high)
+
+    def __str__(self):
+        lower, upper = self.interval
+        return f"median {self.median:.3g}, 95% interval [{lower:.3g}, {upper:.3g}] over {len(self.ratios)} repeats"
+
+
+def grade_time(ratio, cause=""):
+    """Grade of a time-ratio rule from a :class:`TimeRatio`; its numbers stay out of the grade (they go to the
+    timing block)."""
+    verdict = ratio.verdict
+    target = (f"< {ratio.high:g}" if ratio.low == 0 else f"> {ratio.low:g}" if ratio.high == math.inf
+              else f"in [{ratio.low:g}, {ratio.high:g}]")
+    ours = {REPRODUCED: "interval ", NOT: "interval not ", TIMING_NOISE: "interval across "}[verdict] + target
+    return Grade(verdict, ours, "" if verdict == REPRODUCED else cause)
+
+
+RULE_KINDS = {
+    "comparison": f"one number of ours against another in the direction the claim states; a tie when the difference "
+                  f"is within the tie band, {BAND_ERRORS:g} standard errors of the difference from the measured "
+                  "noise (seed-to-seed spread of the sweep's fits; a paired bootstrap over the registration trials); "
+                  "a tie counts neither way",
+    "share": "a claim's comparisons counted under the paper's quantifier: " + "; ".join(
+        f"*{q.name}* ({q.words}): {q.rule}" for q in QUANTIFIERS)
+    + f". The sign test is one-sided at {ALPHA:.0%} over the untied comparisons",
+    "equivalence": "a number within a stated margin of a target (the paper's value, zero, rounding): a comparison "
+                   "won inside the margin and lost outside it, counted as a share",
+    "time ratio": f"CPU-time ratios of interleaved repeats in one job; the median's {1 - ALPHA:.0%} interval from "
+                  "order statistics must clear the claim's threshold: inside reproduced, outside not reproduced, "
+                  f"across it *{TIMING_NOISE}* (no verdict: a rerun could flip it). The numbers are in the timing "
+                  "block, the only part of the report that changes from run to run",
+}
+"""The four rule kinds, as the report defines them once."""
