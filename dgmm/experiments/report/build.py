@@ -13,7 +13,7 @@ from functools import cached_property
 from pathlib import Path
 
 from dgmm.data import load_mesh, load_points
-from dgmm.experiments.report import claims, figures, paper, tables
+from dgmm.experiments.report import claims, figures, layout, paper, tables
 from dgmm.experiments.report.document import markdown_table, to_html, to_markdown
 from dgmm.files import atomic_path
 from dgmm.runtime.tables import read_csv, write_csv
@@ -32,6 +32,7 @@ INPUTS = {
     "optimisers": "the optimisers check's optimisers.csv (config section `checks.optimisers`)",
     "optimisers_seconds": "the optimisers check's optimisers_seconds.csv (config section `checks.optimisers`)",
     "timing_seconds": "the timing check's timing_seconds.csv (config section `checks.timing`)",
+    "identities": "the identities check's identities.csv (config section `checks.identities`)",
     "res4": "bunny res4 from the data stage",
     "full": "the full bunny from the data stage",
     "dense": "the full bunny's evaluation points",
@@ -219,6 +220,14 @@ def _table1_cells(row):
             + [tables.format_number(row[c], 0) for c in tables.TABLE1_C2F_COLUMNS])
 
 
+TABLE1_TEXT = ("As the authors' code ran it: the bunny is Stanford's res4 (948 faces; its likelihoods are Fig 3's "
+               "K=100 fits scored on res4's evaluation set, its registration errors Fig 5's trials), every other "
+               "model a quadric decimation of its full mesh to 1000 faces; K=100, k-means; likelihood of the points "
+               "GMM (vertices) and the mesh GMM (triangles); registration errors as % of ICP's mean error, the mesh "
+               "GMM's with the paper's P2D (one BFGS from the identity) and, in the last two columns, with the "
+               "coarse-to-fine P2D (dgmm.registration.coarse_to_fine: the same mixture, its covariances widened and "
+               "narrowed stage by stage; not in the paper). – : not measured yet. One table per trial protocol and "
+               "EM variant of the mesh GMMs (points GMMs: textbook EM, the same algorithm).")
 TABLE1_SETTINGS = {"scaled": "Trials with translations and the mixtures' covariance floor scaled by the diagonal",
                    "literal": "Trials with the authors' literal ±0.05 translations and reg_covar in model units "
                               "(bunny row: –)"}
@@ -228,109 +237,58 @@ TABLE1_HEADER = ["model (mesh)", "likelihood points", "likelihood mesh", "rotati
                  "rotation % ICP mesh, coarse-to-fine", "translation % ICP mesh, coarse-to-fine"]
 
 
-MACHINE_MARK = "⏱"
-"""Marks a timing claim: time ratios of one run, which change with the machine."""
+def _figure_blocks(spec, drawn, keys):
+    return [("h3", spec.title, spec.name), ("figure", spec.name, spec.caption) if spec.name in drawn else
+            ("p", f"Pending: {_pending_reason(spec, keys)}")]
 
 
-def _grade_text(grade):
-    return f"{{{{{grade.verdict}}}}} {grade.ours}".rstrip()
-
-
-def _claim_item(claim):
-    grades = "; ".join(f"{claims.VARIANT_NAMES[v]}: **{claim.grades[v].verdict}** ({claim.grades[v].ours})"
-                       for v in claims.VARIANTS)
-    whys = f"Why: {claim.why}".replace("\n", " ") if claim.why else ""
-    machine = f" {MACHINE_MARK} Machine dependent." if claim.machine_dependent else ""
-    return (f"**{claim.section}: {claim.title}** — {grades}; paper: {claim.paper}.{machine} {whys} "
-            f"Evidence: {claim.evidence or 'waiting for data.'} Rule: {claim.rule}.").replace("  ", " ")
-
-
-def claim_anchor(index):
-    """Anchor of the ``index``-th claim's details."""
-    return f"claim-{index + 1}"
-
-
-def figure_of(claim):
-    """``(label, anchor)`` of the figure or table a claim is about, from its section ("Fig 2", "Figs 3, 4",
-    "Table 1"): its first number; None for a section of text ("§V-A")."""
-    match = re.match(r"(Figs?|Table) (\d+)", claim.section)
-    if match is None:
-        return None
-    kind = "fig" if match[1].startswith("Fig") else "table"
-    return f"{kind.title()} {match[2]}", f"{kind}{match[2]}"
-
-
-SUMMARY_HEADER = ["where", "claim (details) — why, when not reproduced",
-                  *(f"{claims.VARIANT_NAMES[v]}" + (" (headline)" if v == claims.HEADLINE else "")
-                    for v in claims.VARIANTS), "paper"]
-
-
-def summary_rows(evaluated):
-    """One summary-table row per claim: its section (linked to the figure or table), title linked to its details
-    (and why, when not reproduced), each EM's verdict badge with its deciding number, the paper's number."""
-    rows = []
-    for index, claim in enumerate(evaluated):
-        why = f"\n{claim.why}" if claim.why else ""
-        machine = f" {MACHINE_MARK}" if claim.machine_dependent else ""
-        figure = figure_of(claim)
-        rows.append([f"[{claim.section}](#{figure[1]})" if figure else claim.section,
-                     f"[{claim.title}](#{claim_anchor(index)}){machine}{why}",
-                     *(_grade_text(claim.grades[v]) for v in claims.VARIANTS), claim.paper or "–"])
-    return rows
-
-
-def headline(evaluated):
-    """The verdict counts of each EM, headline first, with what the headline is and what ⏱ marks."""
-    counts = []
-    for variant in claims.VARIANTS:
-        verdicts = [claim.grades[variant].verdict for claim in evaluated]
-        tally = ", ".join(f"{{{{{v}}}}} {verdicts.count(v)}" for v in VERDICT_ORDER if v in verdicts)
-        counts.append(f"**{claims.VARIANT_NAMES[variant]}**: {tally}")
-    return (f"{len(evaluated)} claims of the paper, each graded on the mixtures of both EMs. " + "; ".join(counts)
-            + f". The headline verdict is the {claims.VARIANT_NAMES[claims.HEADLINE]}'s (the code that produced "
-            "the paper's numbers); textbook EM is the paper's equations 11–13. Claims that fit no mixture to a mesh "
-            f"get the same verdict in both. {MACHINE_MARK}: a time ratio measured within one run of this "
-            "machine (it changes with the machine; its timings are kept out of the byte-identical tables).")
-
-
-VERDICT_ORDER = (claims.REPRODUCED, claims.PARTLY, claims.NOT, claims.PENDING)
-
-
-def blocks(loaded, drawn):
-    """The report's blocks (see :mod:`dgmm.experiments.report.document`), figures limited to the names in ``drawn``."""
-    keys = set(loaded.paths)
-    evaluated = claims.evaluate(loaded.measurements())
-    result = [
-        ("h1", TITLE),
-        ("p", headline(evaluated)),
-        ("table", SUMMARY_HEADER, summary_rows(evaluated), "summary"),
-        ("h2", "Claims", "claims"),
-        ("p", ("Our numbers beside those of Keselman & Hebert (2019), claim by claim, computed from the sweep's "
-               "tables (results/tables). Likelihoods are mean log-likelihoods of Poisson-disk evaluation points, "
-               "in nats (densities in m⁻³). Two EM variants are fitted to mesh inputs: textbook EM (paper eqs. "
-               "11–13) and the authors' published code, whose E-step multiplies each triangle's Mahalanobis-plus-"
-               "trace term by its area over the smallest area and whose M-step does not weight by area; every "
-               "claim is graded with both.")),
-        ("list", [_claim_item(claim) for claim in evaluated], [claim_anchor(i) for i in range(len(evaluated))]),
-        ("h2", "Table 1: five models, ours (paper)", "table1"),
-        ("p", ("As the authors' code ran it: the bunny is Stanford's res4 (948 faces; its likelihoods are Fig 3's "
-               "K=100 fits scored on res4's evaluation set, its registration errors Fig 5's trials), every other "
-               "model a quadric decimation of its full mesh to 1000 faces; K=100, k-means; likelihood "
-               "of the points GMM (vertices) and the mesh GMM (triangles); registration errors as % of ICP's mean "
-               "error, the mesh GMM's with the paper's P2D (one BFGS from the identity) and, in the last two "
-               "columns, with the coarse-to-fine P2D (dgmm.registration.coarse_to_fine: the same mixture, its "
-               "covariances widened and narrowed stage by stage; not in the paper). – : not measured yet. One table per "
-               "trial protocol and EM variant of the mesh GMMs (points GMMs: textbook EM, the same algorithm).")),
-    ]
+def _table1_blocks(loaded):
+    result = [("h3", "Table 1: five models, ours (paper)", "table1"), ("p", TABLE1_TEXT)]
     for (protocol, variant), rows in loaded.tables1.items():
         result.append(("p", f"**{TABLE1_SETTINGS[protocol]}; mesh GMMs fitted with {TABLE1_VARIANTS[variant]}**"
                             + (" (the claims' table)" if (protocol, variant) == ("scaled", "textbook") else "")))
         result.append(("table", TABLE1_HEADER, [_table1_cells(row) for row in rows]))
-    for spec in FIGURES:
-        result.append(("h2", spec.title, spec.name))
-        result.append(("figure", spec.name, spec.caption) if spec.name in drawn else
-                      ("p", f"Pending: {_pending_reason(spec, keys)}"))
     return result
+
+
+def _shown_with(figure):
+    """Names of the report's figures and tables that a claim's ``figure`` ("Fig 5", "Table 1") stands for."""
+    anchor = layout.figure_anchor(figure)
+    return [] if anchor is None else ["table1"] if anchor == "table1" else [
+        spec.name for spec in FIGURES if re.fullmatch(rf"{anchor}(_\w+)?", spec.name)]
+
+
+def blocks(loaded, drawn):
+    """The report's blocks (see :mod:`dgmm.experiments.report.document`), figures limited to the names in ``drawn``:
+    the findings, the summary table, the grading rules, then the claims section by section, each section followed
+    by the figures and tables its claims are about, and last the timing block."""
+    keys = set(loaded.paths)
+    evaluated = claims.evaluate(loaded.measurements())
+    result = [("h1", TITLE), *(("p", text) for text in layout.findings(evaluated)),
+              ("table", layout.SUMMARY_HEADER, layout.summary_rows(evaluated), "summary"),
+              ("h2", "How the claims are graded", "grading"), ("list", layout.grading_rules())]
+    by_section = {}
+    for index, claim in enumerate(evaluated):
+        by_section.setdefault(layout.first_section(claim), []).append((index, claim))
+    order = list(layout.SECTION_TITLES)
+    specs = {spec.name: spec for spec in FIGURES}
+    placed = []
+    for section in sorted(by_section, key=lambda name: order.index(name) if name in order else len(order)):
+        listed = by_section[section]
+        result.append(("h2", layout.SECTION_TITLES.get(section, section), layout.section_anchor(section)))
+        result.append(("list", [layout.claim_item(claim) for _, claim in listed],
+                       [layout.claim_anchor(index) for index, _ in listed]))
+        for name in dict.fromkeys(name for _, claim in listed for name in _shown_with(claim.figure)):
+            if name not in placed:
+                placed.append(name)
+                result += _table1_blocks(loaded) if name == "table1" else _figure_blocks(specs[name], drawn, keys)
+    rest = [spec for spec in FIGURES if spec.name not in placed]
+    if rest:
+        result.append(("h2", "Other figures", "figures"))
+        for spec in rest:
+            result += _figure_blocks(spec, drawn, keys)
+    result.append(("h2", "Timings of this run", "timings"))
+    return result + layout.timing_block(evaluated)
 
 
 def _png_bytes(figure):

@@ -1,7 +1,7 @@
 """A report as a list of blocks, rendered to Markdown (figures linked) and to self-contained HTML (figures
 embedded as base64 PNG data URIs, inline CSS, no network).
 
-Blocks are tuples: ``("h1", text)``, ``("h2", text, anchor)``, ``("p", text)``, ``("list", [text, ...])`` or
+Blocks are tuples: ``("h1", text)``, ``("h2", text, anchor)``, ``("h3", text, anchor)``, ``("p", text)``, ``("list", [text, ...])`` or
 ``("list", [text, ...], [anchor, ...])``, ``("table", header, rows)`` and ``("figure", name, caption)`` with ``name``
 a PNG in ``figures/``. Text is plain (escaped in HTML) with three kinds of markup: ``**bold**``, links to an
 anchor of the page ``[text](#anchor)`` and verdict badges ``{{verdict}}`` (a coloured label in HTML, a coloured
@@ -19,9 +19,9 @@ table.summary{font-size:.8rem;line-height:1.25}table.summary td{vertical-align:t
 table.summary td,table.summary th{text-align:left}
 .badge{display:inline-block;padding:.1rem .45rem;border-radius:.7rem;color:#fff;font-weight:bold;white-space:nowrap}
 .reproduced{background:#1a7f37}.partly{background:#bf8700}.not-reproduced{background:#cf222e}
-.pending{background:#6e7781}"""
+.pending{background:#6e7781}.within-timing-noise{background:#8250df}"""
 
-BADGE_MARKS = {"reproduced": "🟢", "partly": "🟡", "not reproduced": "🔴", "pending": "⚪"}
+BADGE_MARKS = {"reproduced": "🟢", "partly": "🟡", "not reproduced": "🔴", "within timing noise": "🟣", "pending": "⚪"}
 """Verdict -> the coloured mark beside its badge in Markdown (HTML colours it with CSS)."""
 
 _LINK = re.compile(r"\[([^\]]+)\]\(#([\w-]+)\)")
@@ -55,6 +55,7 @@ def _anchor(anchor):
 MARKDOWN = {
     "h1": lambda text: f"# {text}",
     "h2": lambda text, anchor=None: f"## {_anchor(anchor)}{text}",
+    "h3": lambda text, anchor=None: f"### {_anchor(anchor)}{text}",
     "p": lambda text: text,
     "list": lambda items, anchors=None: "\n".join(f"- {_anchor(anchor)}{item}"
                                                   for item, anchor in zip(items, anchors or [None] * len(items))),
@@ -100,6 +101,7 @@ def to_html(blocks, images, title):
     render = {
         "h1": lambda text: f"<h1>{_bold_html(text)}</h1>",
         "h2": lambda text, anchor=None: f"<h2{_id(anchor)}>{_bold_html(text)}</h2>",
+        "h3": lambda text, anchor=None: f"<h3{_id(anchor)}>{_bold_html(text)}</h3>",
         "p": lambda text: f"<p>{_bold_html(text)}</p>",
         "list": lambda items, anchors=None: "<ul>" + "".join(
             f"<li{_id(anchor)}>{_bold_html(item)}</li>" for item, anchor in zip(items, anchors or [None] * len(items)))

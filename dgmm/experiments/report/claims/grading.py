@@ -178,8 +178,8 @@ class Quantifier:
         if self.name == "often":
             total = wins + ties + losses
             return REPRODUCED if wins >= OFTEN * total else PARTLY if wins >= SOMETIMES * total else NOT
-        allowed = 0 if self.name == "every" else (1 - PLAIN_SHARE) * (wins + losses)
-        if wins and losses <= allowed:
+        needed = wins + losses if self.name == "every" else PLAIN_SHARE * (wins + losses) - 1e-9  # float-safe
+        if wins and wins >= needed:
             return REPRODUCED
         return PARTLY if tally.beyond_chance() else NOT
 

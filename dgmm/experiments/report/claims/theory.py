@@ -5,7 +5,7 @@ from dataclasses import replace
 import numpy as np
 
 from dgmm.experiments.report.claims.grading import BAND_ERRORS, EVERY, estimate, grade_share, within
-from dgmm.experiments.report.claims.rules import TEXT, Claim, pending, same, timing_claim
+from dgmm.experiments.report.claims.rules import TEXT, VARIANT_NAMES, Claim, pending, same, timing_claim
 from dgmm.experiments.report.tables import fig2_bars
 from dgmm.experiments.shared_responsibility import PER_POINT_MEASURE
 
@@ -64,7 +64,7 @@ def invariant_to_resampling(data):
         comparisons = [within(f"seed {row['seed']}", float(row["component_gap"]), 0.0, ROUNDING) for row in rows]
         largest = max(float(row["component_gap"]) for row in rows)
         refit = estimate([float(row["eval_gap"]) for row in rows])
-        lines.append(f"{variant} EM: integrals change ≤ {largest:.1e}; mixtures refitted to the split mesh score "
+        lines.append(f"{VARIANT_NAMES[variant]}: integrals change ≤ {largest:.1e}; mixtures refitted to the split mesh score "
                      f"{refit:+.3f} ± {refit.error:.3f} nat (one responsibility per smaller triangle tightens the EM "
                      f"bound by {estimate([float(row['bound_gap']) for row in rows]):+.3f})")
         grades[variant] = grade_share(comparisons, EVERY, "The integrals change beyond rounding.")
@@ -82,17 +82,17 @@ def approximation_is_fast(data):
 IDENTITIES = "identities.csv (config section `checks.identities`)"
 
 
-def _identity(data, section, title, identity, paper_words):
+def _identity(data, section, title, identity, paper_words, figure=""):
     """An identity the paper states, graded on identities.csv's relative error against :data:`ROUNDING`."""
     rule = f"equivalence: the two sides, computed independently, agree within {ROUNDING:g} (relative) in every case"
     rows = [row for row in data.identities or [] if row["identity"] == identity]
     if not rows:
-        return pending(section, "", title, rule, IDENTITIES, paper_words, TEXT)
+        return pending(section, figure, title, rule, IDENTITIES, paper_words, TEXT)
     row = rows[0]
     relative = float(row["max_error"]) / max(float(row["scale"]), 1e-300)
     comparison = within(identity, relative, 0.0, ROUNDING)
     grade = grade_share([comparison], EVERY, f"The two sides differ by {relative:.1e} (relative).")
-    return Claim(section, "", title, rule, f"{row['cases']} cases, largest relative difference {relative:.1e}"
+    return Claim(section, figure, title, rule, f"{row['cases']} cases, largest relative difference {relative:.1e}"
                  + (f"; {row['detail']}" if row.get("detail") else "") + ".", same(grade), paper_words, TEXT)
 
 
@@ -100,7 +100,7 @@ def triangle_covariance_as_cgal(data):
     """§III: the triangle covariance "is consistent with the standard formulation in CGAL" (whose triangle moment
     matrix "should be a 5x multiple of the one for 3D tetrahedrons")."""
     return _identity(data, "§III", "The triangle covariance is CGAL's (a 5× multiple of the tetrahedron's moment "
-                     "matrix)", "cgal_triangle_moment", "consistent with CGAL")
+                     "matrix)", "cgal_triangle_moment", "consistent with CGAL", "Fig 1")
 
 
 def mean_update_as_approximation(data):

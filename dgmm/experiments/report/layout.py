@@ -1,0 +1,141 @@
+"""The report's text around the graded claims: the findings in prose, the summary table, the claims by the paper's
+sections beside their figures, the grading rules defined once, and the timing block.
+
+Everything here is a function of the verdicts and of the numbers that do not change between runs of one commit;
+a timing claim's numbers go only to the timing block, which :func:`without_timings` strips to compare two runs.
+"""
+import re
+
+from dgmm.experiments.report import claims
+from dgmm.experiments.report.claims import grading
+from dgmm.experiments.report.claims.rules import NOTEBOOK, TEXT
+
+SECTION_TITLES = {
+    "§I": "I. Introduction",
+    "§II": "II. Method",
+    "§III": "III. Modifying EM to account for triangles",
+    "§III-A": "III-A. Evaluating the derived loss function",
+    "§IV": "IV. Results",
+    "§IV-A": "IV-A. Mesh input data",
+    "§IV-B": "IV-B. Mesh decimation",
+    "§IV-C": "IV-C. Discussion",
+    "§V-A": "V-A. Generalization to other primitives",
+    "§VI-A": "VI-A. Mesh registration",
+    "§VI-B": "VI-B. Analysis of mesh registration",
+    "§VI-C": "VI-C. Other 3D models",
+    "§VI-D": "VI-D. Visual odometry",
+    "§VII": "VII. Conclusion",
+}
+"""The paper's sections that make claims, in the paper's order."""
+VERDICT_ORDER = (grading.REPRODUCED, grading.PARTLY, grading.NOT, grading.TIMING_NOISE, grading.PENDING)
+SOURCE_MARKS = {NOTEBOOK: "ᴺ", TEXT: "", claims.rules.WORDS: ""}
+"""Mark of a paper value by where it comes from (:data:`~.claims.rules.NOTEBOOK`: not in the paper's text)."""
+TIMING_START, TIMING_END = "<!-- timings: the only part that changes from run to run -->", "<!-- /timings -->"
+
+
+def first_section(claim):
+    """The section a claim is listed under: the first it names ("§I, §VII" → "§I")."""
+    return claim.section.split(",")[0].strip()
+
+
+def claim_anchor(index):
+    """Anchor of the ``index``-th claim's details."""
+    return f"claim-{index + 1}"
+
+
+def section_anchor(section):
+    return "section-" + section.lstrip("§").lower()
+
+
+def figure_anchor(figure):
+    """Anchor of a claim's figure or table ("Fig 5" → "fig5", "Table 1" → "table1"; "" → None)."""
+    match = re.fullmatch(r"(Fig|Table) (\d+)", figure)
+    return f"{match[1].lower()}{match[2]}" if match else None
+
+
+def _grade_text(grade):
+    return f"{{{{{grade.verdict}}}}} {grade.ours}".rstrip()
+
+
+SUMMARY_HEADER = ["section", "claim — why, when not reproduced",
+                  *(claims.VARIANT_NAMES[v] + (" (headline)" if v == claims.HEADLINE else "")
+                    for v in claims.VARIANTS), "paper"]
+
+
+def summary_rows(evaluated):
+    """One row per claim: its section (linked to its place in the report), its title linked to its details with
+    the cause when not reproduced, each EM's verdict and deciding number, the paper's value (marked by source)."""
+    return [[f"[{claim.section}](#{section_anchor(first_section(claim))})",
+             f"[{claim.title}](#{claim_anchor(index)})" + (f"\n{claim.why}" if claim.why else ""),
+             *(_grade_text(claim.grades[v]) for v in claims.VARIANTS),
+             (claim.paper or "–") + SOURCE_MARKS.get(claim.source, "")]
+            for index, claim in enumerate(evaluated)]
+
+
+def _counts(evaluated, variant):
+    verdicts = [claim.grades[variant].verdict for claim in evaluated]
+    return ", ".join(f"{verdicts.count(v)} {v}" for v in VERDICT_ORDER if v in verdicts)
+
+
+def findings(evaluated):
+    """The prose at the top: the counts of each EM, then per section what does not reproduce (the headline EM's
+    verdict), then the claims on which the two EMs disagree."""
+    headline, other = claims.HEADLINE, next(v for v in claims.VARIANTS if v != claims.HEADLINE)
+    paragraphs = [
+        f"We graded {len(evaluated)} claims of the paper on our sweep, each on the mixtures of both EMs. With the "
+        f"{claims.VARIANT_NAMES[headline]} (the code that produced the paper's numbers, the headline): "
+        f"{_counts(evaluated, headline)}. With {claims.VARIANT_NAMES[other]} (the paper's equations 11–13): "
+        f"{_counts(evaluated, other)}. Claims that fit no mixture to a mesh get one verdict in both."]
+    by_section = {}
+    for index, claim in enumerate(evaluated):
+        by_section.setdefault(first_section(claim), []).append((index, claim))
+    lines = []
+    for section, listed in by_section.items():
+        held = sum(claim.verdict == grading.REPRODUCED for _, claim in listed)
+        misses = [f"[{claim.title}](#{claim_anchor(index)}) ({claim.verdict})" for index, claim in listed
+                  if claim.verdict != grading.REPRODUCED]
+        lines.append(f"**{SECTION_TITLES.get(section, section)}**: {held} of {len(listed)} reproduced"
+                     + (f"; not: {'; '.join(misses)}" if misses else ""))
+    paragraphs.append("By the paper's sections, " + ". ".join(lines) + ".")
+    split = [f"[{claim.title}](#{claim_anchor(index)})" for index, claim in enumerate(evaluated)
+             if claim.grades[headline].verdict != claim.grades[other].verdict]
+    if split:
+        paragraphs.append(f"The two EMs disagree on {len(split)} claims: " + "; ".join(split) + ". Where the "
+                          "headline reproduces and textbook EM does not, the switch between them (the authors' "
+                          "E-step scales each triangle's terms by its area) is the measured cause.")
+    return paragraphs
+
+
+def grading_rules():
+    """The rule kinds, verdicts and value sources, defined once for every claim."""
+    kinds = [f"**{kind}**: {text}." for kind, text in grading.RULE_KINDS.items()]
+    return kinds + [
+        f"**Verdicts**: {', '.join(VERDICT_ORDER)} (pending: a table the claim needs is missing). A claim not "
+        "reproduced names its measured cause: an experiment that switches the suspected cause and moves the "
+        "verdict, or \"cause not found\" and what was tried.",
+        f"**Paper values**: from the paper's text unless marked {SOURCE_MARKS[NOTEBOOK]}: taken from "
+        f"{NOTEBOOK}.",
+    ]
+
+
+def claim_item(claim):
+    """A claim's details: its verdicts, the paper's value and source, the evidence and the rule."""
+    grades = "; ".join(f"{claims.VARIANT_NAMES[v]} {_grade_text(claim.grades[v])}" for v in claims.VARIANTS)
+    evidence = claim.evidence or "its numbers are in the [timing block](#timings)."
+    source = "" if claim.source != NOTEBOOK else " (authors' notebooks)"
+    return (f"**{claim.title}** ({claim.section}) — {grades}. Paper: {claim.paper or '–'}{source}. "
+            f"Ours: {evidence} Rule: {claim.rule}.").replace("..", ".")
+
+
+def timing_block(evaluated):
+    """The run's timing numbers, one line per timing claim, between markers that :func:`without_timings`
+    finds."""
+    lines = [f"[{claim.title}](#{claim_anchor(index)}): {claim.timings}." for index, claim in enumerate(evaluated)
+             if claim.timings]
+    return [("p", TIMING_START), ("list", lines or ["no timing claim has its data yet"]), ("p", TIMING_END)]
+
+
+def without_timings(markdown):
+    """``markdown`` with its timing block cut out: what two runs of one commit must agree on byte for byte."""
+    start, end = markdown.find(TIMING_START), markdown.find(TIMING_END)
+    return markdown if start < 0 or end < 0 else markdown[:start] + markdown[end + len(TIMING_END):]

@@ -1,0 +1,115 @@
+"""The grading framework's rule kinds on hand-made numbers, each verdict worked out by hand."""
+import math
+
+import numpy as np
+import pytest
+from scipy.stats import binom
+
+from dgmm.experiments.report.claims.grading import (EVERY, LOSS, NOT, OFTEN_WORDS, PARTLY, PLAIN, REPRODUCED, TIE,
+                                                    TIMING_NOISE, WIN, Estimate, Tally, TimeRatio, compare,
+                                                    estimate, grade_share, grade_time, median_interval,
+                                                    paired_difference, versus_paper, within)
+
+
+def outcomes(wins, ties, losses):
+    """Comparisons with these counts (margins of ±1 against a band of 0.5, ties at 0)."""
+    return [compare(f"w{i}", 1.0, band=0.5) for i in range(wins)] + [
+        compare(f"t{i}", 0.2, band=0.5) for i in range(ties)] + [compare(f"l{i}", -1.0, band=0.5) for i in range(losses)]
+
+
+def test_a_comparison_inside_its_band_is_a_tie_whichever_way_it_leans():
+    difference = Estimate(7.28, 0.02) - Estimate(7.29, 0.02)  # 0.01 below, band 2·√(0.02²+0.02²) = 0.057
+    assert math.isclose(difference.error, math.hypot(0.02, 0.02))
+    assert compare("a", difference).outcome == TIE
+    assert compare("a", Estimate(0.06, 0.02)).outcome == WIN  # 0.06 > 2 × 0.02
+    assert compare("a", Estimate(0.06, 0.02), higher=False).outcome == LOSS
+    assert compare("a", Estimate(0.04, 0.02)).outcome == TIE  # 0.04 ≤ 0.04: on the edge is still a tie
+
+
+def test_estimate_is_the_mean_with_the_standard_error():
+    values = [1.0, 2.0, 4.0]
+    assert estimate(values) == Estimate(7 / 3, float(np.std(values, ddof=1)) / math.sqrt(3))
+    assert estimate([5.0]).error == 0.0
+
+
+def test_ties_count_neither_way():
+    assert Tally(tuple(outcomes(3, 5, 0))).counts == (3, 5, 0)
+    assert grade_share(outcomes(3, 5, 0), EVERY).verdict == REPRODUCED  # every untied comparison won
+    assert grade_share(outcomes(0, 4, 0), EVERY).verdict == NOT  # nothing shown beyond noise
+
+
+def test_a_universal_claim_fails_on_one_loss_unless_the_rest_is_beyond_chance():
+    # 4 won, 1 lost: P(X ≥ 4 | n=5) = 6/32 = 0.19, not beyond chance
+    assert grade_share(outcomes(4, 0, 1), EVERY).verdict == NOT
+    # 9 won, 1 lost: P(X ≥ 9 | n=10) = 11/1024 = 0.011 < 0.05
+    assert grade_share(outcomes(9, 0, 1), EVERY).verdict == PARTLY
+
+
+@pytest.mark.parametrize("wins, losses, verdict", [
+    (12, 12, NOT),        # a coin flip is never partly
+    (17, 7, PARTLY),      # P(X ≥ 17 | 24) = 0.032
+    (16, 8, NOT),         # P(X ≥ 16 | 24) = 0.076
+    (18, 2, REPRODUCED),  # losses 2 ≤ 10% of 20
+    (17, 3, PARTLY),      # 3 > 10% of 20, P(X ≥ 17 | 20) = 0.0013
+])
+def test_a_plain_comparative_allows_one_loss_in_ten_and_partly_needs_the_sign_test(wins, losses, verdict):
+    assert grade_share(outcomes(wins, 0, losses), PLAIN).verdict == verdict
+
+
+def test_the_sign_test_edge():
+    """The smallest win count that is beyond chance over 24 untied comparisons, from the binomial tail."""
+    edge = next(k for k in range(25) if binom.sf(k - 1, 24, 0.5) < 0.05)
+    assert edge == 17
+    assert Tally(tuple(outcomes(edge, 0, 24 - edge))).beyond_chance()
+    assert not Tally(tuple(outcomes(edge - 1, 0, 25 - edge))).beyond_chance()
+
+
+def test_often_counts_the_wins_among_all_comparisons():
+    assert grade_share(outcomes(5, 5, 0), OFTEN_WORDS).verdict == REPRODUCED  # 5/10 = 50%
+    assert grade_share(outcomes(3, 7, 0), OFTEN_WORDS).verdict == PARTLY  # 30% ≥ 25%
+    assert grade_share(outcomes(2, 6, 2), OFTEN_WORDS).verdict == NOT  # 20%
+
+
+def test_a_cause_is_kept_only_when_not_reproduced():
+    assert grade_share(outcomes(2, 0, 0), EVERY, "because").why == ""
+    assert grade_share(outcomes(0, 0, 2), EVERY, "because").why == "because"
+
+
+def test_equivalence_within_a_margin():
+    assert within("x", 8.64, 8.62, 0.03).outcome == WIN
+    assert within("x", 8.66, 8.62, 0.03).outcome == LOSS
+    # against a paper value printed to 2 decimals: 2·√2 × 0.005 + 0.005 = 0.0191
+    assert versus_paper("K=400", Estimate(8.635, 0.005), 8.62, 2).outcome == WIN
+    assert versus_paper("K=400", Estimate(8.645, 0.005), 8.62, 2).outcome == LOSS
+
+
+def test_paired_difference_over_trials():
+    rng = np.random.default_rng(3)
+    base = rng.exponential(1.0, 200)
+    first, second = base + 0.5, base  # the same trials, shifted: the paired difference has no spread
+    paired = paired_difference(first, second)
+    assert math.isclose(paired.value, 0.5) and paired.error < 1e-12
+    unrelated = paired_difference(rng.exponential(1.0, 200), base)
+    assert 0.5 * math.sqrt(2 / 200) < unrelated.error < 2 * math.sqrt(2 / 200)  # σ = 1 per sample
+    assert paired_difference(first, second) == paired  # seeded: the same band on every run
+
+
+@pytest.mark.parametrize("n, rank", [(6, 1), (10, 2), (20, 6), (30, 10)])
+def test_median_interval_is_the_order_statistic_of_the_binomial(n, rank):
+    """Ranks from the binomial tables: P(B(n, ½) < rank) ≤ 2.5% < P(B(n, ½) < rank + 1)."""
+    assert binom.cdf(rank - 1, n, 0.5) <= 0.025 < binom.cdf(rank, n, 0.5)
+    values = np.arange(n, dtype=float)[::-1]
+    assert median_interval(values)[1] == (rank - 1, n - rank)
+
+
+def test_a_timing_interval_that_straddles_its_threshold_gives_no_verdict():
+    straddles = TimeRatio((0.90, 0.95, 0.97, 0.99, 1.01, 1.02, 1.03, 1.04, 1.06, 1.10, 0.98), 0.0, 1.0)
+    assert straddles.interval[0] < 1.0 < straddles.interval[1] and straddles.verdict == TIMING_NOISE
+    grade = grade_time(straddles, "why")
+    assert (grade.verdict, grade.why) == (TIMING_NOISE, "why") and not any(c.isdigit() for c in grade.ours[:-1])
+    clears = TimeRatio((0.80, 0.82, 0.85, 0.90, 0.95, 0.97, 0.84, 0.83, 0.88, 0.86, 0.91), 0.0, 1.0)
+    assert clears.verdict == REPRODUCED
+    above = TimeRatio(tuple(np.linspace(1.1, 1.4, 11)), 0.0, 1.0)
+    assert above.verdict == NOT
+    similar = TimeRatio(tuple(np.linspace(0.6, 1.9, 11)), 0.5, 2.0)
+    assert similar.verdict == REPRODUCED
