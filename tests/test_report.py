@@ -15,8 +15,10 @@ from matplotlib.figure import Figure
 
 from dgmm.data import load_mesh, save_ply
 from dgmm.experiments.report import claims, figure_names
-from dgmm.experiments.report.build import SUMMARY_HEADER, figure_of, summary_rows
+from dgmm.experiments.report import layout
+from dgmm.experiments.report.build import Loaded, blocks
 from dgmm.experiments.report.claims import theory
+from dgmm.experiments.report.claims.rules import NOTEBOOK
 from dgmm.experiments.report.document import markdown_table, to_html, to_markdown
 from dgmm.experiments.report.tables import fig2_bars, likelihood_means, registration_errors, table1, table1_mesh
 from dgmm.experiments.shared_responsibility import PER_POINT_MEASURE
@@ -107,37 +109,20 @@ def test_table1_is_ours_beside_the_paper_with_errors_as_percent_of_icp():
 # Claims, by hand
 # ---------------------------------------------------------------------------------------------------------
 
-@pytest.mark.parametrize("gap, verdict", [(0.05, "reproduced"), (-0.1, "reproduced"), (0.3, "partly"),
-                                          (-0.5, "partly"), (0.6, "not reproduced")])
-def test_gap_rule(gap, verdict):
-    assert claims.gap_verdict(gap) == verdict
-
-
-@pytest.mark.parametrize("wins, total, verdict", [(10, 10, "reproduced"), (9, 10, "reproduced"),
-                                                  (8, 10, "partly"), (1, 2, "partly"), (4, 10, "not reproduced")])
-def test_share_rule(wins, total, verdict):
-    assert claims.share_verdict(wins, total) == verdict
-
-
-def test_fig2_claim_uses_the_papers_quantity():
-    # triangle − all points: −0.05 in the paper's quantity (reproduced), +0.2 in the bound.
-    claim = theory.triangle_equals_points(claims.Measurements(fig2=FIG2_ROWS))
+def test_fig2_claim_compares_the_triangle_with_the_sampled_points_within_their_noise():
+    rows = [dict(row) for row in FIG2_ROWS] + [
+        {"measure": "points", "n": "1000", "draw": str(draw), "bound": "7.3", "expected": str(value)}
+        for draw, value in enumerate((7.01, 6.99))]  # mean 7.00, sd 0.01414: band 0.0283
+    claim = theory.triangle_equals_points(claims.Measurements(fig2=rows))  # triangle 7.0 − 7.0: won
     assert claim.verdict == "reproduced" and claim.grades["textbook"].verdict == "reproduced"  # no mesh EM in it
-    assert "-0.050" in claim.evidence and "+0.200" in claim.evidence
-    assert claim.grades["authors"].ours == "triangle − all points -0.050 nat" and claim.why == ""
-
-
-def test_fig2_claim_says_how_much_of_the_gap_the_shared_responsibility_is():
-    rows = [dict(row) for row in FIG2_ROWS]
-    rows[0]["expected"] = "6.75"  # triangle − all points: −0.3, partly
+    assert claim.grades["authors"].ours == "+0.000 nat" and claim.why == "" and "0.028 nat" in claim.rule
+    rows[0]["expected"] = "6.9"  # −0.1: lost; with a responsibility per point 7.04 − 7.00 = +0.04: lost too
     claim = theory.triangle_equals_points(claims.Measurements(fig2=rows))
-    assert claim.verdict == "partly"
-    # per point 7.04 − triangle 6.75 = 0.29 of the 0.30 gap: 97%
-    assert "costs it 0.290 nat" in claim.why and "scores 7.040 (all points 7.050)" in claim.why
-    assert "97% of the difference" in claim.why
-    without = theory.triangle_equals_points(claims.Measurements(fig2=[row for row in rows
-                                                                       if row["measure"] != PER_POINT_MEASURE]))
-    assert "no per-point row" in without.why
+    assert claim.verdict == "not reproduced"
+    assert "the gap is +0.040 nat and the comparison is lost" in claim.why
+    rows[-3]["expected"] = "7.02"  # per point +0.02: inside the band, the switch moves the comparison
+    assert "+0.020 nat and the comparison is won" in theory.triangle_equals_points(
+        claims.Measurements(fig2=rows)).why
 
 
 def test_figures_follow_the_configured_inputs():
@@ -149,27 +134,48 @@ def test_figures_follow_the_configured_inputs():
     assert figure_names(everything, ["res4-exact", "bunny/quadric1000"]) == ["fig1", "fig2", "fig3", "fig7"]
 
 
-def test_summary_rows_link_each_claim_to_its_details_and_figure():
+def test_summary_rows_link_each_claim_to_its_section_and_details():
     both = lambda verdict, ours="", why="": {v: claims.Grade(verdict, ours, why) for v in claims.VARIANTS}  # noqa
-    evaluated = [claims.Claim("Fig 2", "a", "rule", "evidence", both("reproduced", "1", "ignored"), "2"),
-                 claims.Claim("Figs 3, 4", "b", "rule", "evidence",
+    evaluated = [claims.Claim("§III-A", "Fig 2", "a", "rule", "evidence", both("reproduced", "1", "ignored"), "2"),
+                 claims.Claim("§IV-A", "Fig 3", "b", "rule", "evidence",
                               {"authors": claims.Grade("reproduced", "5"),
-                               "textbook": claims.Grade("partly", "6", "Because of c.")}),
-                 claims.Claim("§V-A", "d", "rule", "evidence", both("not reproduced", "3", "Because of e."), "4",
-                              machine_dependent=True)]
-    assert figure_of(evaluated[1]) == ("Fig 3", "fig3") and figure_of(evaluated[2]) is None
-    assert summary_rows(evaluated) == [  # authors' EM (the headline) first
-        ["[Fig 2](#fig2)", "[a](#claim-1)", "{{reproduced}} 1", "{{reproduced}} 1", "2"],
-        ["[Figs 3, 4](#fig3)", "[b](#claim-2)\ntextbook EM: Because of c.", "{{reproduced}} 5", "{{partly}} 6", "–"],
-        ["§V-A", "[d](#claim-3) ⏱\nBecause of e.", "{{not reproduced}} 3", "{{not reproduced}} 3", "4"]]
-    assert SUMMARY_HEADER[2:4] == ["authors' EM (headline)", "textbook EM"]
-    page = to_html([("table", ["claim", "verdict"], [row[1:3] for row in summary_rows(evaluated)], "summary")],
-                   {}, "T")
-    assert ('<td><a href="#claim-3">d</a> ⏱<br>Because of e.</td>'
+                               "textbook": claims.Grade("partly", "6", "Because of c.")}, "7", NOTEBOOK),
+                 claims.Claim("§I, §VII", "", "d", "rule", "", both("not reproduced", "3", "Because of e."), "4",
+                              timings="t")]
+    assert layout.figure_anchor("Fig 2") == "fig2" and layout.figure_anchor("") is None
+    assert layout.summary_rows(evaluated) == [  # authors' EM (the headline) first
+        ["[§III-A](#section-iii-a)", "[a](#claim-1)", "{{reproduced}} 1", "{{reproduced}} 1", "2"],
+        ["[§IV-A](#section-iv-a)", "[b](#claim-2)\ntextbook EM: Because of c.", "{{reproduced}} 5",
+         "{{partly}} 6", "7ᴺ"],
+        ["[§I, §VII](#section-i)", "[d](#claim-3)\nBecause of e.", "{{not reproduced}} 3", "{{not reproduced}} 3",
+         "4"]]
+    assert layout.SUMMARY_HEADER[2:4] == ["authors' EM (headline)", "textbook EM"]
+    assert "timing block" in layout.claim_item(evaluated[2])  # a timing claim's numbers are only there
+    page = to_html([("table", ["claim", "verdict"], [row[1:3] for row in layout.summary_rows(evaluated)],
+                     "summary")], {}, "T")
+    assert ('<td><a href="#claim-3">d</a><br>Because of e.</td>'
             '<td><span class="badge not-reproduced">not reproduced</span> 3</td>') in page
     assert markdown_table(["v"], [["{{partly}}"]]) == "| v |\n|---|\n| {{partly}} |"
     assert to_markdown([("table", ["v"], [["{{partly}}", "a|b\nc"]])]) == \
         "| v |\n|---|\n| 🟡 **partly** | a\\|b<br>c |\n"
+
+
+def timing_rows(seconds):
+    """An approximation timing check of 11 repeats: approx takes ``seconds[i]`` when exact takes 1."""
+    return [{"check": "approximation", "setting": setting, "repeat": repeat, "seconds": value, "iterations": 25,
+             "detail": ""} for repeat, approx in enumerate(seconds)
+            for setting, value in (("exact", 1.0), ("approx", approx))]
+
+
+def test_only_the_timing_block_changes_when_only_the_timings_do(tmp_path):
+    pages = []
+    for index, seconds in enumerate((np.linspace(0.70, 0.80, 11), np.linspace(0.60, 0.85, 11))):
+        write_csv(tmp_path / f"timing{index}.csv", timing_rows(seconds))
+        document = blocks(Loaded({"timing_seconds": tmp_path / f"timing{index}.csv"}, seed=0), drawn=[])
+        pages.append(to_markdown(document))
+    assert pages[0] != pages[1] and "median 0.75" in pages[0] and "median 0.725" in pages[1]
+    assert layout.without_timings(pages[0]) == layout.without_timings(pages[1])
+    assert "{{reproduced}}" not in pages[0] and "🟢 **reproduced** interval < 1" in pages[0]
 
 
 def test_markdown_and_html_rendering():
