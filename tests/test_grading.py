@@ -34,7 +34,11 @@ def test_estimate_is_the_mean_with_the_standard_error():
 
 def test_ties_count_neither_way():
     assert Tally(tuple(outcomes(3, 5, 0))).counts == (3, 5, 0)
-    assert grade_share(outcomes(3, 5, 0), EVERY).verdict == REPRODUCED  # every untied comparison won
+    assert grade_share(outcomes(5, 3, 0), PLAIN).verdict == REPRODUCED  # the ties are no loss
+    assert grade_share(outcomes(5, 3, 1), PLAIN).verdict == NOT  # 5 of 6 untied: 83% < 90%; P(X ≥ 5 | 6) = 0.11
+    assert grade_share(outcomes(3, 5, 0), PLAIN).verdict == PARTLY  # mostly undecided: fewer wins than ties
+    assert grade_share(outcomes(3, 5, 0), EVERY).verdict == PARTLY  # a universal claim needs every case shown
+    assert grade_share(outcomes(8, 0, 0), EVERY).verdict == REPRODUCED
     assert grade_share(outcomes(0, 4, 0), EVERY).verdict == NOT  # nothing shown beyond noise
 
 

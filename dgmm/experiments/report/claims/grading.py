@@ -4,9 +4,10 @@
   the measured noise of the two (twice the standard error of their difference). Beyond the band it is won or lost;
   inside it, tied, and a tie counts neither way.
 - **share**: a claim's comparisons counted under the paper's quantifier (:data:`QUANTIFIERS`). Universal words
-  ("every", "always", "never") need every untied comparison won; a plain comparative ("A fits better than B") allows
-  one loss in ten; "often" needs half of all the comparisons. "Partly" needs evidence beyond chance: a one-sided
-  sign test at 5% over the untied comparisons, never a coin flip.
+  ("every", "always", "never") need every comparison won; a plain comparative ("A fits better than B") allows one
+  loss in ten among the untied comparisons, which must be no fewer than the ties; "often" needs half of all the
+  comparisons. "Partly" needs evidence beyond chance (a one-sided sign test at 5% over the untied comparisons, never
+  a coin flip) or no untied comparison lost.
 - **equivalence**: a number within a stated margin of a target (the paper's value, zero, a ratio's 1): each is a
   comparison whose margin is the distance left to the edge, and its claim a share of them.
 - **time ratio**: CPU-time ratios of interleaved repeats; their median's 95% interval (order statistics, no
@@ -178,17 +179,21 @@ class Quantifier:
         if self.name == "often":
             total = wins + ties + losses
             return REPRODUCED if wins >= OFTEN * total else PARTLY if wins >= SOMETIMES * total else NOT
-        needed = wins + losses if self.name == "every" else PLAIN_SHARE * (wins + losses) - 1e-9  # float-safe
-        if wins and wins >= needed:
+        if self.name == "every":
+            reproduced = wins and not ties and not losses
+        else:  # most of the decided comparisons won, and the decided ones at least as many as the undecided
+            reproduced = wins and wins >= PLAIN_SHARE * (wins + losses) - 1e-9 and wins >= ties  # float-safe share
+        if reproduced:
             return REPRODUCED
-        return PARTLY if tally.beyond_chance() else NOT
+        return PARTLY if tally.beyond_chance() or (wins and not losses) else NOT
 
 
-EVERY = Quantifier("every", "every, all, always, never", "reproduced when every untied comparison is won (at least "
-                   "one); partly when the wins are beyond chance (sign test); else not reproduced")
-PLAIN = Quantifier("plain", "a plain comparative, usually, largely", f"reproduced when at least {PLAIN_SHARE:.0%} of the "
-                  "untied comparisons are won; partly when the wins are beyond chance (sign test); else not "
-                  "reproduced")
+PARTLY_RULE = "partly when the wins are beyond chance (sign test) or none of the untied comparisons is lost"
+EVERY = Quantifier("every", "every, all, always, never", f"reproduced when every comparison is won (a tie does not "
+                   f"show the claim); {PARTLY_RULE}; else not reproduced")
+PLAIN = Quantifier("plain", "a plain comparative, usually, largely", f"reproduced when at least {PLAIN_SHARE:.0%} of "
+                   "the untied comparisons are won and they are no fewer than the ties; "
+                   f"{PARTLY_RULE}; else not reproduced")
 OFTEN_WORDS = Quantifier("often", "often", f"reproduced when at least {OFTEN:.0%} of all comparisons are won, partly "
                          f"at {SOMETIMES:.0%}; else not reproduced")
 QUANTIFIERS = (EVERY, PLAIN, OFTEN_WORDS)
