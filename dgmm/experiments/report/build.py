@@ -2,8 +2,9 @@
 
 Inputs are named files (the keys of ``INPUTS``); a figure is drawn when all the inputs it needs are given and,
 for the likelihood figures, when the sweep fits at least one of its inputs. Everything else is a section that
-says it is pending. Outputs: ``report.html`` (self-contained), ``report.md``, ``table1.csv``, ``table1.md`` and
-``figures/{name}.png``, all written atomically and byte-reproducible.
+says it is pending. Outputs: ``report.md``, ``claims.md`` (the evidence ledger), ``report.html`` (both, self-contained),
+``table1.csv``, ``table1.md`` and ``figures/{name}.png``, all written atomically; everything but the timing block of
+``report.md`` and ``report.html`` is byte-reproducible.
 """
 import io
 import math
@@ -258,12 +259,11 @@ def _shown_with(figure):
         spec.name for spec in FIGURES if re.fullmatch(rf"{anchor}(_\w+)?", spec.name)]
 
 
-def blocks(loaded, drawn):
+def blocks(loaded, drawn, evaluated):
     """The report's blocks (see :mod:`dgmm.experiments.report.document`), figures limited to the names in ``drawn``:
-    the findings, the summary table, the grading rules, then the claims section by section, each section followed
-    by the figures and tables its claims are about, and last the timing block."""
+    the findings, the summary table, the grading rules, then ``evaluated`` (the graded claims) section by section,
+    each section followed by the figures and tables its claims are about, and last the timing block."""
     keys = set(loaded.paths)
-    evaluated = claims.evaluate(loaded.measurements())
     result = [("h1", TITLE), *(("p", text) for text in layout.findings(evaluated)),
               ("table", layout.SUMMARY_HEADER, layout.summary_rows(evaluated), "summary"),
               ("h2", "How the claims are graded", "grading"), ("list", layout.grading_rules())]
@@ -330,6 +330,8 @@ def build_report(paths, drawn, out_dir, seed=0):
     _write(out_dir / "table1.md", markdown_table(["trials, EM", *TABLE1_HEADER],
                                                  [[f"{row['protocol']}, {row['variant']}", *_table1_cells(row)]
                                                   for row in every]) + "\n")
-    document = blocks(loaded, drawn)
+    evaluated = claims.evaluate(loaded.measurements())
+    document, evidence = blocks(loaded, drawn, evaluated), layout.ledger(evaluated)
     _write(out_dir / "report.md", to_markdown(document))
-    _write(out_dir / "report.html", to_html(document, images, TITLE))
+    _write(out_dir / "claims.md", to_markdown(evidence))
+    _write(out_dir / "report.html", to_html(document + evidence, images, TITLE))

@@ -9,6 +9,7 @@ import re
 from dgmm.experiments.report import claims
 from dgmm.experiments.report.claims import grading
 from dgmm.experiments.report.claims.rules import NOTEBOOK, TEXT
+from dgmm.experiments.report.document import BADGE_MARKS
 
 SECTION_TITLES = {
     "§I": "I. Introduction",
@@ -89,14 +90,10 @@ def findings(evaluated):
     by_section = {}
     for index, claim in enumerate(evaluated):
         by_section.setdefault(first_section(claim), []).append((index, claim))
-    lines = []
-    for section, listed in by_section.items():
-        held = sum(claim.verdict == grading.REPRODUCED for _, claim in listed)
-        misses = [f"[{claim.title}](#{claim_anchor(index)}) ({claim.verdict})" for index, claim in listed
-                  if claim.verdict != grading.REPRODUCED]
-        lines.append(f"**{SECTION_TITLES.get(section, section)}**: {held} of {len(listed)} reproduced"
-                     + (f"; not: {'; '.join(misses)}" if misses else ""))
-    paragraphs.append("By the paper's sections, " + ". ".join(lines) + ".")
+    lines = [f"{SECTION_TITLES.get(section, section)} {sum(c.verdict == grading.REPRODUCED for _, c in listed)} "
+             f"of {len(listed)}" for section, listed in by_section.items()]
+    paragraphs.append("Reproduced with the headline EM, by the paper's sections: " + "; ".join(lines) + ". Every "
+                      "comparison behind each verdict is in the evidence ledger, claims.md.")
     split = [f"[{claim.title}](#{claim_anchor(index)})" for index, claim in enumerate(evaluated)
              if claim.grades[headline].verdict != claim.grades[other].verdict]
     if split:
@@ -119,12 +116,27 @@ def grading_rules():
 
 
 def claim_item(claim):
-    """A claim's details: its verdicts, the paper's value and source, the evidence and the rule."""
+    """A claim as its section lists it: both EMs' verdict marks, the claim, its rule in one line."""
+    marks = "".join(BADGE_MARKS[claim.grades[v].verdict] for v in claims.VARIANTS)
+    return f"{marks} **{claim.title}** ({claim.section}): {claim.rule}."
+
+
+def ledger_item(claim):
+    """A claim in the evidence ledger: its verdicts, the paper's value and source, our numbers and the rule."""
     grades = "; ".join(f"{claims.VARIANT_NAMES[v]} {_grade_text(claim.grades[v])}" for v in claims.VARIANTS)
-    evidence = claim.evidence or "its numbers are in the [timing block](#timings)."
+    evidence = claim.evidence or "its numbers are in the report's timing block."
     source = "" if claim.source != NOTEBOOK else " (authors' notebooks)"
     return (f"**{claim.title}** ({claim.section}) — {grades}. Paper: {claim.paper or '–'}{source}. "
             f"Ours: {evidence} Rule: {claim.rule}.").replace("..", ".")
+
+
+def ledger(evaluated):
+    """The evidence ledger (``claims.md``): every claim's numbers, in the report's order."""
+    return [("h1", "The claims' evidence"),
+            ("p", "Our numbers behind each verdict of [the report](report.md), claim by claim, in the report's "
+                  "order (rule kinds: the report's \"How the claims are graded\")."),
+            ("list", [ledger_item(claim) for claim in evaluated],
+             [f"evidence-{index + 1}" for index in range(len(evaluated))])]
 
 
 def timing_block(evaluated):
