@@ -1,20 +1,34 @@
 """dgmm.experiments.checks against independent references: scipy's rotations and Gaussian density, Monte Carlo
-integrals over triangles, and counts by hand."""
+integrals over triangles, and counts by hand; the identities' references against planted errors; the timing checks'
+rows (every setting once per repeat, in alternating order)."""
 import numpy as np
 import pytest
+import trimesh
+import yaml
 from scipy.spatial.transform import Rotation
 from scipy.stats import multivariate_normal
 
 from dgmm.data import load_mesh, load_points
+from dgmm.experiments.checks import identities
 from dgmm.experiments.checks.convergence import coverage, effective_components, iterations_to_converge
+from dgmm.experiments.checks.identities import CGAL_TETRAHEDRON_MOMENT, identity_rows
+from dgmm.experiments.checks.interleaved import COLUMNS, interleaved_times, setting_order
 from dgmm.experiments.checks.optimisers import _rotvec_params
 from dgmm.experiments.checks.resampling import component_integrals, split_in_four
-from dgmm.experiments.checks.timing import d2d_cost
+from dgmm.experiments.checks.timing import TIMING_CHECKS
+from dgmm.experiments.checks.timing_meshes import approximation_times, decimation_times, sampling_times
+from dgmm.experiments.checks.timing_odometry import d2d_primitives_times, odometry_frame_times
+from dgmm.experiments.checks.timing_registration import cpd_p2d_times, d2d_cost, d2d_determinant_times
 from dgmm.experiments.sweep import build_input, fit_seeds
 from dgmm.mixture import GaussianMixture
+from dgmm.odometry import read_sequence
 from dgmm.primitives import Primitives
 from dgmm.runtime.tables import read_csv
+
+from conftest import REPO, SHARED_DATA
 from tests.workflow import run_snakemake
+
+FR1_XYZ = SHARED_DATA / "tum" / "rgbd_dataset_freiburg1_xyz"
 
 
 def test_iterations_to_converge_is_the_first_iteration_that_stays_within_the_tolerance():
@@ -83,7 +97,126 @@ def test_split_in_four_keeps_the_surface_and_the_component_integrals(bunny_res4)
     assert np.all(np.abs(integrals - [sample.mean() for sample in samples]) <= 4 * errors + 1e-3)
 
 
-CHECK_TABLES = ("convergence.csv", "resampling.csv", "optimisers.csv")
+def _relative(row):
+    return row["max_error"] / row["scale"]
+
+
+@pytest.fixture(scope="module")
+def res4_mesh(bunny_res4):
+    """bunny_res4 as (vertices, faces) arrays, and a K=12 mixture of its triangles."""
+    vertices, faces = np.asarray(bunny_res4.vertices), np.asarray(bunny_res4.faces)
+    return vertices, faces, GaussianMixture(12, random_state=0, max_iter=5).fit(Primitives.from_mesh(vertices, faces))
+
+
+def test_the_identities_hold_to_rounding(res4_mesh):
+    rows = identity_rows(*res4_mesh, random_triangles=50, n_components=4, n_iter=10, reg_covar=1e-6, seed=0)
+    assert [row["identity"] for row in rows] == ["cgal_triangle_moment", "cgal_five_times_tetrahedron",
+                                                 "mean_update_exact_equals_approx", "hierarchical_gmm_update",
+                                                 "points_equal_sklearn"]
+    assert rows[0]["cases"] == 948 + 50
+    assert all(_relative(row) < 1e-11 for row in rows), rows
+    # the row is its worst quantity, and the detail names every quantity compared
+    assert rows[2]["detail"].count(" of ") == 3 and "exact - approx covariances" in rows[2]["detail"]
+
+
+def test_a_wrong_cgal_moment_matrix_fails(res4_mesh):
+    """A planted wrong matrix, 4 times the tetrahedron's instead of CGAL's 5 times, fails by far."""
+    vertices, faces, _ = res4_mesh
+    wrong = 4 * CGAL_TETRAHEDRON_MOMENT
+    row = identities.cgal_triangle_moment(vertices, faces, 20, np.random.default_rng(0), moment=wrong)
+    assert _relative(row) > 0.1
+    assert _relative(identities.cgal_five_times_tetrahedron(wrong)) == pytest.approx(0.2)
+
+
+def test_a_perturbed_triangle_covariance_fails_the_mean_update_identity(res4_mesh, monkeypatch):
+    triangle_covariances = identities.triangle_covariances
+    monkeypatch.setattr(identities, "triangle_covariances", lambda triangles: 1.01 * triangle_covariances(triangles))
+    row = identities.mean_update_exact_equals_approx(*res4_mesh[:2], 4, np.random.default_rng(0))
+    assert _relative(row) == pytest.approx(0.01 / 1.01, rel=1e-6)  # the covariance term is off by 1%
+
+
+def test_a_hierarchical_update_without_the_primitives_covariances_fails(res4_mesh, monkeypatch):
+    update = identities.weighted_update
+    monkeypatch.setattr(identities, "weighted_update",
+                        lambda h, sizes, means, covariances: update(h, sizes, means, 0 * covariances))
+    assert _relative(identities.hierarchical_gmm_update(res4_mesh[2], 4, np.random.default_rng(0))) > 0.01
+
+
+def test_scikit_learn_one_iteration_short_fails(res4_mesh, monkeypatch):
+    sklearn_fit = identities.sklearn_fit
+    monkeypatch.setattr(identities, "sklearn_fit",
+                        lambda points, start, n_iter, reg_covar: sklearn_fit(points, start, n_iter - 1, reg_covar))
+    assert _relative(identities.points_equal_sklearn(res4_mesh[0], 4, 10, 1e-6, np.random.default_rng(0))) > 1e-6
+
+
+def test_interleaved_repeats_run_every_setting_once_per_repeat_in_alternating_order():
+    calls = []
+    settings = {name: (lambda case, name=name: calls.append((case, name)) or f"{name} on {case}")
+                for name in ("a", "b", "c")}
+    rows = interleaved_times("check", ["x", "y", "z"], settings, lambda case, setting, result: (7, result))
+    assert calls == [("x", "a"), ("x", "b"), ("x", "c"), ("y", "c"), ("y", "b"), ("y", "a"),
+                     ("z", "a"), ("z", "b"), ("z", "c")]
+    assert [(row["repeat"], row["setting"]) for row in rows] == [(0, "a"), (0, "b"), (0, "c"), (1, "c"), (1, "b"),
+                                                                 (1, "a"), (2, "a"), (2, "b"), (2, "c")]
+    assert all(set(row) == set(COLUMNS) and row["check"] == "check" and row["iterations"] == 7 for row in rows)
+    assert rows[3]["detail"] == "c on y" and all(row["seconds"] >= 0 for row in rows)
+    assert setting_order(settings, 4) == ["a", "b", "c"] and setting_order(settings, 5) == ["c", "b", "a"]
+
+
+def test_timing_checks_are_the_configurable_ones():
+    schema = yaml.safe_load((REPO / "workflow" / "schemas" / "config.schema.yaml").read_text())
+    assert set(TIMING_CHECKS) == set(schema["properties"]["checks"]["properties"]["timing"]["properties"])
+    assert set(TIMING_CHECKS) == set(yaml.safe_load((REPO / "config.yaml").read_text())["checks"]["timing"])
+
+
+def _assert_paired(rows, check, settings, repeats):
+    """Every setting once per repeat, in the given order on even repeats and reversed on odd ones."""
+    expected = [(repeat, setting) for repeat in range(repeats) for setting in (settings if repeat % 2 == 0
+                                                                               else settings[::-1])]
+    assert [(row["repeat"], row["setting"]) for row in rows] == expected
+    assert all(row["check"] == check and row["seconds"] > 0 for row in rows)
+
+
+def test_mesh_timing_rows(res4_mesh):
+    mesh = res4_mesh[:2]
+    rows = approximation_times(mesh, repeats=2, n_components=5, max_iter=2, root_seed=0)
+    _assert_paired(rows, "approximation", ["exact", "approx", "centroids"], 2)
+    assert {row["iterations"] for row in rows} == {2}
+    rows = decimation_times(mesh, repeats=2, budget=300) + sampling_times(mesh, repeats=2, budget=100)
+    _assert_paired(rows[:4], "decimation", ["clustering", "quadric"], 2)
+    _assert_paired(rows[4:], "sampling", ["random", "poisson"], 2)
+    assert rows[1]["detail"] == "300 faces" and rows[4]["detail"] == "100 points" and rows[0]["iterations"] == ""
+
+
+def test_registration_timing_rows(res4_mesh, bunny_res4):
+    vertices, faces, mixture = res4_mesh
+    rows = d2d_determinant_times((vertices, faces), repeats=2, n_components=5, root_seed=0)
+    _assert_paired(rows, "d2d determinant", ["determinant-free", "with determinant"], 2)
+    assert all(row["detail"].startswith("rotation error ") for row in rows)
+    dense = trimesh.sample.sample_surface(bunny_res4, 2000, seed=1)[0]
+    rows = cpd_p2d_times((vertices, faces), dense, mixture, repeats=2, root_seed=0, key="test", max_angle_deg=15.0,
+                         max_translation=0.05, cpd={"max_iter": 5, "tol": 1e-9}, gradient="analytic")
+    _assert_paired(rows, "cpd vs p2d", ["cpd", "cpd dgmm", "p2d", "p2d numerical"], 2)
+    by_setting = {(row["repeat"], row["setting"]): row for row in rows}
+    for repeat in range(2):  # pycpd and dgmm's copy of it: the same iterations and the same pose
+        assert by_setting[repeat, "cpd"]["iterations"] == by_setting[repeat, "cpd dgmm"]["iterations"] == 5
+        assert by_setting[repeat, "cpd"]["detail"] == by_setting[repeat, "cpd dgmm"]["detail"]
+
+
+ODOMETRY = dict(name=FR1_XYZ.name, root_seed=0, intrinsics="ros", n_components=10, schedule="overlap", warm_iter=0,
+                pixel_size="area", icp_points=500)
+
+
+def test_odometry_timing_rows():
+    sequence = read_sequence(FR1_XYZ)
+    rows = d2d_primitives_times(sequence, repeats=2, **ODOMETRY)
+    _assert_paired(rows, "d2d primitives", ["pixels", "pixels bfgs", "points", "points bfgs"], 2)
+    rows = odometry_frame_times(sequence, repeats=2, **ODOMETRY)
+    _assert_paired(rows, "odometry frame", ["gmm-pixels", "icp"], 2)
+    assert all(row["detail"].startswith("rotation error ") for row in rows)
+
+
+CHECK_TABLES = ("convergence.csv", "resampling.csv", "optimisers.csv", "identities.csv")
 
 
 @pytest.mark.slow  # a real Snakemake run of the check jobs on tests/config.yaml
@@ -105,7 +238,9 @@ def test_check_jobs_write_their_tables_and_rerun_byte_identical(tmp_path):
                               init="kmeans", variant="textbook", n_seeds=1, root_seed=0,
                               key="bunny/res4-exact/textbook/k12-kmeans", max_iter=25, tol=1e-12, reg_covar=1e-6)
     assert float(row["eval_ll_25"]) == pytest.approx(sweep_rows[0]["eval_ll"], abs=1e-9)
-    assert {row["check"] for row in read_csv(tables / "timing_seconds.csv")} == {"approximation", "d2d determinant"}
+    assert {row["check"] for row in read_csv(tables / "timing_seconds.csv")} == {
+        name.replace("_", " ") for name in TIMING_CHECKS}
+    assert all(float(row["max_error"]) <= 1e-9 * float(row["scale"]) for row in read_csv(tables / "identities.csv"))
     for name in CHECK_TABLES:
         (tables / name).unlink()
     rerun = run_snakemake(tmp_path, *targets)

@@ -5,6 +5,7 @@
 rule report:
     input:
         **report_inputs(),
+        **IDENTITY_TABLES,
     output:
         html=f"{REPORT_DIR}/report.html",
         markdown=f"{REPORT_DIR}/report.md",
