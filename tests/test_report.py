@@ -19,7 +19,7 @@ from dgmm.experiments.report import layout
 from dgmm.experiments.report.build import Loaded, blocks
 from dgmm.experiments.report.claims import theory
 from dgmm.experiments.report.claims.rules import NOTEBOOK
-from dgmm.experiments.report.document import markdown_table, to_html, to_markdown
+from dgmm.experiments.report.document import BADGE_MARKS, markdown_table, to_html, to_markdown
 from dgmm.experiments.report.tables import fig2_bars, likelihood_means, registration_errors, table1, table1_mesh
 from dgmm.experiments.shared_responsibility import PER_POINT_MEASURE
 from dgmm.runtime.tables import read_csv, write_csv
@@ -29,6 +29,8 @@ REPO = Path(__file__).resolve().parents[1]
 SNAKEMAKE = Path(sys.executable).with_name("snakemake")
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 MODELS = ("armadillo", "bunny", "dragon", "happy", "lucy")
+MAX_REPORT_BYTES = 30_000
+"""The report's markdown stays readable: at most this size (the HTML may inline the figures)."""
 
 
 def ll_row(model, input_name, k, init, variant, seed, eval_ll):
@@ -263,10 +265,15 @@ def write_check_tables(tables):
     write_csv(tables / "optimisers_seconds.csv", [{**{key: row[key] for key in ("optimiser", "rotation", "trial")},
                                                   "seconds": 0.2} for row in rows])
     write_csv(tables / "timing_seconds.csv", [
-        {"check": check, "setting": setting, "repeat": 0, "seconds": seconds, "iterations": 25, "detail": ""}
+        {"check": check, "setting": setting, "repeat": repeat, "seconds": seconds * (1 + 0.01 * repeat),
+         "iterations": 25, "detail": ""} for repeat in range(6)
         for check, setting, seconds in (("approximation", "exact", 0.04), ("approximation", "approx", 0.03),
                                         ("d2d determinant", "determinant-free", 0.4),
                                         ("d2d determinant", "with determinant", 1.6))])
+    write_csv(tables / "identities.csv", [
+        {"identity": identity, "cases": 3, "max_error": 1e-17, "scale": 1.0, "detail": ""}
+        for identity in ("cgal_triangle_moment", "mean_update_exact_equals_approx", "hierarchical_gmm_update",
+                         "points_equal_sklearn")])
 
 
 def run_report(workdir, config):
@@ -300,15 +307,20 @@ def test_report_writes_every_output(built):
     out, first, drawn = built
     names = {str(path) for path in first}
     figures = {f"figures/{name}.png" for name in drawn}
-    assert names == {"report.html", "report.md", "table1.csv", "table1.md"} | figures
+    assert names == {"report.html", "report.md", "claims.md", "table1.csv", "table1.md"} | figures
     markdown = (out / "report.md").read_text()
     assert ("Pending: waits for the odometry stage" in markdown) == ("fig6" not in drawn)
     assert all(f"({figure})" in markdown for figure in figures)
-    assert len(re.findall(r"— authors' EM: \*\*(reproduced|partly|not reproduced|pending)\*\*", markdown)) == \
-        len(claims.CLAIMS)
+    assert len(markdown.encode()) <= MAX_REPORT_BYTES
+    # Every claim: once in the summary, once in its section (with both EMs' marks), once in the evidence ledger.
+    marks = "[" + "".join(BADGE_MARKS.values()) + "]"
+    assert len(re.findall(rf'<a id="claim-\d+"></a>{marks}{{2}} \*\*', markdown)) == len(claims.CLAIMS)
+    ledger = (out / "claims.md").read_text()
+    assert len(re.findall(r"— authors' EM \S+ \*\*(reproduced|partly|not reproduced|within timing noise|pending)\*\*",
+                          ledger)) == len(claims.CLAIMS)
     # The summary table opens the report: one row per claim, each not reproduced saying why.
     html_page = (out / "report.html").read_text()
-    summary = html_page[html_page.index("<h1>"):html_page.index('<h2 id="claims">')]
+    summary = html_page[html_page.index("<h1>"):html_page.index('<h2 id="grading">')]
     rows = re.findall(r"<tr><td>.*?</td><td>(.*?)</td><td><span class=\"badge ([\w-]+)\">.*?</td>"
                       r"<td><span class=\"badge ([\w-]+)\">", summary)
     assert len(rows) == len(claims.CLAIMS)

@@ -122,10 +122,6 @@ rule check_identities:
         "../scripts/check_identities.py"
 
 
-# The identities' table, for `checks` and the report (a key of its own: it is not in common.smk's CHECK_TABLES).
-IDENTITY_TABLES = {"identities": rules.check_identities.output.rows} if "identities" in CHECKS else {}
-
-
 # Timing checks (dgmm.experiments.checks.timing): the inputs and settings of every checks.timing entry, the sweep's
 # files and settings so that every setting runs as the sweep runs it, with the entry's own (repeats, a budget). A
 # check on a sequence names one of odometry.sequences (its folder name, or synthetic) and runs when the odometry
@@ -221,4 +217,3 @@ rule timing_table:
 rule checks:
     input:
         list(checks_outputs().values()),
-        list(IDENTITY_TABLES.values()),

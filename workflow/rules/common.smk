@@ -213,6 +213,7 @@ CHECK_TABLES = {
     "resampling": {"resampling": "resampling.csv"},
     "optimisers": {"optimisers": "optimisers.csv", "optimisers_seconds": "optimisers_seconds.csv"},
     "timing": {"timing_seconds": "timing_seconds.csv"},
+    "identities": {"identities": "identities.csv"},
 }
 
 
