@@ -59,14 +59,34 @@ def test_table1_always_outperformed_fails_on_one_model():
     claim = table1.mesh_registers_better(Measurements(registration=rows))
     assert verdicts(claim) == {"authors": "partly", "textbook": "partly"}
     assert claim.grades["textbook"].ours == "7/8 won"
-    assert claim.grades["textbook"].why.startswith("Cause not found for bunny rotation vs ICP")
+    assert claim.grades["textbook"].why == ("Cause not found (tried: the coarse-to-fine P2D on the same mixture and "
+                                            "trials).")
+    assert "cause: not found for bunny rotation vs ICP" in claim.evidence  # the comparison is named in the evidence
     # The coarse-to-fine P2D on the same mixture and trials wins it: the cause names the paper's P2D's minima.
     rows += table1_rows("bunny", "res4", (0.5, -0.5), c2f_offset=-0.5)[-6:]  # the c2f rows: 3 trials × 2 EMs
     claim = table1.mesh_registers_better(Measurements(registration=rows))
-    assert claim.grades["authors"].why.startswith("Wrong local minima of the paper's P2D")
+    assert claim.grades["authors"].why == ("Wrong local minima of the paper's P2D (one BFGS from the identity): "
+                                           "coarse-to-fine P2D on the same mixture turns its one comparison into a "
+                                           "win.")
     # "Often significantly" counts only the mesh-vs-points comparisons: all 4 won beyond their band (the bunny's
     # rotation is still 0.5 below the points GMM's) -> reproduced.
     assert table1.registration_margins(Measurements(registration=rows)).verdict == "reproduced"
+
+
+def test_a_trial_stuck_in_a_wrong_minimum_is_named_when_coarse_to_fine_wins_its_ties():
+    # Lucy: the mesh GMM's third trial ends at 68° (beyond 45°: a wrong local minimum); its rotation differences to
+    # ICP (0.5, 0.5, 65) and to the points GMM (-0.5, -0.5, 64) spread so far that both tie. Translation 0.5 below
+    # both on every trial: won. Every: 2 won, 2 tied, none lost -> partly. The coarse-to-fine P2D, 0.5 below ICP on
+    # every trial, wins the two ties: the cause names the stuck trial.
+    rows = [row for row in table1_rows("lucy", "quadric1000", (-0.5, -0.5), c2f_offset=-0.5)
+            if not (row["method"] == "mesh-kmeans" and row["trial"] == "2")]
+    rows += [{**row, "rotation_error_deg": "68.0"} for row in table1_rows("lucy", "quadric1000", (-0.5, -0.5))
+             if row["method"] == "mesh-kmeans" and row["trial"] == "2"]
+    claim = table1.mesh_registers_better(Measurements(registration=rows))
+    assert verdicts(claim) == {"authors": "partly", "textbook": "partly"}
+    assert claim.grades["authors"].why == ("Lucy's one trial stuck at 68° in a wrong local minimum: coarse-to-fine P2D "
+                                           "on the same mixture turns its 2 ties into wins.")
+    assert "cause: wrong local minima of the paper's P2D (one BFGS from the identity)" in claim.evidence
 
 
 def timing_rows(check, seconds):

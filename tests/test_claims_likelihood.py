@@ -59,8 +59,11 @@ def test_a_universal_claim_fails_on_one_loss():
     claim = decimation.exact_never_prefers_random(Measurements(likelihood=likelihood(cells)))
     # 2 won, 1 lost: one loss fails "never"; P(X >= 2 | 3) = 0.5 is not beyond chance, so not even partly
     assert verdicts(claim) == {"authors": "not reproduced", "textbook": "not reproduced"}
-    assert claim.grades["authors"].why == ("Cause not found: the authors' EM's random starts end level with or above "
-                                           "k-means at res4-exact K=400: -1.200.")  # textbook EM loses it too
+    # textbook EM loses it too: the EM is not the cause; the sentence says what was tried, the numbers are evidence
+    assert claim.grades["authors"].why == ("Cause not found: textbook EM on the same data and starts does not win it "
+                                           "either.")
+    assert ("cause: the authors' EM's random starts end level with or above k-means at res4-exact K=400: -1.200"
+            in claim.evidence)
 
 
 def test_one_early_exit_fails_every_fit_runs_25_and_is_always_listed():
@@ -70,7 +73,9 @@ def test_one_early_exit_fails_every_fit_runs_25_and_is_always_listed():
     # textbook: 9 of 10 fits ran 25, 1 lost: not every fit; P(X >= 9 | 10) = 11/1024 < 0.05 -> partly
     assert claim.grades["textbook"].verdict == "partly" and claim.grades["textbook"].ours == "9/10 won"
     assert "bunny res4-vertices kmeans K=100: 1: 24" in claim.evidence
-    assert claim.grades["textbook"].why.startswith("The tolerance rule: EM stops once the bound changes by less than")
+    assert claim.grades["textbook"].why == ("The ε tolerance stops fits at a fixed point before iteration 25: 1 point "
+                                            "fit with collapsed components.")
+    assert "cause: the tolerance rule: EM stops once the bound changes by less than" in claim.evidence
     # 4 fits, one short: P(X >= 3 | 4) = 5/16, not beyond chance -> not reproduced
     rows = likelihood({("res4-vertices", "textbook", "kmeans", k): 7.0 for k in (6, 12)},
                       n_iter={("res4-vertices", "kmeans", 12, 0): 7})
@@ -112,8 +117,10 @@ def test_about_a_third_is_the_median_of_paired_ratios():
     claim = convergence.converges_in_a_third(Measurements(convergence=rows))
     assert verdicts(claim) == {"authors": "reproduced", "textbook": "not reproduced"}
     assert claim.grades["authors"].ours == "points / exact 3.00"
-    assert claim.grades["textbook"].why.startswith("Textbook EM's exact mesh needs 1.00 times the points' iterations")
-    assert "the authors' EM on the same data and start method wins it" in claim.grades["textbook"].why
+    assert claim.grades["textbook"].why == ("The authors' E-step area scaling: the authors' EM wins the one "
+                                            "comparison this EM loses.")
+    assert ("cause: textbook EM's exact mesh needs 1.00 times the points' iterations (median); the authors' EM on the "
+            "same data and start method wins 1 of the 1 (points / exact 3.00, reproduced)") in claim.evidence
 
 
 def test_the_median_of_an_even_count_is_the_mean_of_the_middle_two():

@@ -6,15 +6,16 @@ import pytest
 from scipy.stats import binom
 
 from dgmm.experiments.report.claims.grading import (EVERY, LOSS, NOT, OFTEN_WORDS, PARTLY, PLAIN, REPRODUCED, TIE,
-                                                    TIMING_NOISE, WIN, Estimate, Tally, TimeRatio, compare,
-                                                    estimate, grade_share, grade_time, median_interval,
+                                                    TIMING_NOISE, WIN, Estimate, Tally, TimeRatio, bootstrap, compare,
+                                                    estimate, grade_share, grade_time, magnitude, median_interval,
                                                     paired_difference, versus_paper, within)
 
 
 def outcomes(wins, ties, losses):
     """Comparisons with these counts (margins of ±1 against a band of 0.5, ties at 0)."""
-    return [compare(f"w{i}", 1.0, band=0.5) for i in range(wins)] + [
-        compare(f"t{i}", 0.2, band=0.5) for i in range(ties)] + [compare(f"l{i}", -1.0, band=0.5) for i in range(losses)]
+    return ([compare(f"w{i}", 1.0, band=0.5) for i in range(wins)]
+            + [compare(f"t{i}", 0.2, band=0.5) for i in range(ties)]
+            + [compare(f"l{i}", -1.0, band=0.5) for i in range(losses)])
 
 
 def test_a_comparison_inside_its_band_is_a_tie_whichever_way_it_leans():
@@ -96,6 +97,16 @@ def test_paired_difference_over_trials():
     unrelated = paired_difference(rng.exponential(1.0, 200), base)
     assert 0.5 * math.sqrt(2 / 200) < unrelated.error < 2 * math.sqrt(2 / 200)  # σ = 1 per sample
     assert paired_difference(first, second) == paired  # seeded: the same band on every run
+
+
+def test_every_statistic_of_the_same_trials_takes_the_same_resamples():
+    rng = np.random.default_rng(4)
+    first, second = rng.exponential(1.0, 50), rng.exponential(1.0, 50)
+    difference = bootstrap(lambda a, b, axis=None: np.median(a, axis=axis) - np.median(b, axis=axis), first, second)
+    assert difference == paired_difference(first, second, np.median)  # one bootstrap: the same band either way
+    ratio = bootstrap(lambda a, axis=None: np.mean(a, axis=axis) / np.median(a, axis=axis), first)
+    assert math.isclose(ratio.value, np.mean(first) / np.median(first)) and ratio.error > 0
+    assert magnitude(Estimate(-0.3, 0.1)) == Estimate(0.3, 0.1)
 
 
 @pytest.mark.parametrize("n, rank", [(6, 1), (10, 2), (20, 6), (30, 10)])

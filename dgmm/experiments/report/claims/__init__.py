@@ -6,21 +6,13 @@ Fig 7), :mod:`~.decimation` (§IV-B, §IV-C, Fig 4), :mod:`~.convergence` (§I, 
 verdicts are in :mod:`~.grading`; what a claim holds and the EM policy in :mod:`~.rules`; what the claims read in
 :mod:`~.measurements`.
 """
-from importlib import import_module
-
+from dgmm.experiments.report.claims import convergence, decimation, fitting, odometry, registration, table1, theory
 from dgmm.experiments.report.claims.grading import (NOT, PARTLY, PENDING, REPRODUCED, RULE_KINDS, TIMING_NOISE,
                                                     VERDICTS, Grade)
 from dgmm.experiments.report.claims.measurements import TABLES, Measurements
 from dgmm.experiments.report.claims.rules import FIG3_INPUTS, FIG4_INPUTS, HEADLINE, VARIANT_NAMES, VARIANTS, Claim
 
-MODULES = ("theory", "fitting", "decimation", "convergence", "registration", "table1", "odometry")
-SECTIONS = []
-for _name in MODULES:  # TEMPORARY while the modules move to the grading framework: skip those not moved yet
-    try:
-        SECTIONS.append(import_module(f"{__name__}.{_name}"))
-    except ImportError:
-        pass
-SECTIONS = tuple(SECTIONS)
+SECTIONS = (theory, fitting, decimation, convergence, registration, table1, odometry)
 CLAIMS = tuple(claim for module in SECTIONS for claim in module.CLAIMS)
 
 

@@ -7,12 +7,10 @@ means with both errors; a difference within one fit (100 against 25 iterations) 
 """
 from collections import defaultdict
 
-from dgmm.experiments.report.claims.fitting import (capital, em, em_switch, graded_per_em, listing, misses,
-                                                    still_climbing, switch_or_not_found)
-from dgmm.experiments.report.claims.grading import (EVERY, LOSS, PLAIN, TIE, WIN, compare, estimate, grade_share,
-                                                    within)
-from dgmm.experiments.report.claims.rules import (FIG3_INPUTS, FIG3_MODEL, TEXT, Claim, best, cells, is_mesh,
-                                                  median, pending, same)
+from dgmm.experiments.report.claims.grading import EVERY, LOSS, PLAIN, TIE, WIN, compare, estimate, within
+from dgmm.experiments.report.claims.rules import (FIG3_INPUTS, FIG3_MODEL, TEXT, Cause, Claim, best, by_cause, cells,
+                                                  em, em_switch, graded_per_em, graded_share, is_mesh, listing,
+                                                  median, misses, pending, same, still_climbing, switch_or_not_found)
 
 CONVERGED = "n_iter_within_0.01"
 """Iterations the bound took to come within 0.01 nat of its value after 100 (convergence.csv)."""
@@ -56,10 +54,12 @@ def points_better_with_100(data):
         compared.append(compare(f"{name} K={k} {init}", gain, detail=f"{gain:+.3f} ± {gain.error:.3f}"))
         climbs.append(_column(fits, "bound_final") - _column(fits, "bound_25"))
     flat = [(c, climb) for c, climb in zip(compared, climbs) if c.outcome != WIN]
-    cause = ("Where the evaluation does not gain, the training bound still climbs: the later iterations fit the "
-             "points, not the surface (" + "; ".join(f"{c}, bound {climb:+.3f}" for c, climb in flat) + ").")
-    return Claim(*args, rule, f"gain, mean ± standard error over seeds: {listing(compared)}. Point fits are the same "
-                 "for both EMs.", same(grade_share(compared, PLAIN, cause)), "better")
+    cause = Cause("Where the evaluation does not gain, the training bound still climbs: the later iterations fit the "
+                  "points, not the surface.",
+                  "where not won, the training bound: " + "; ".join(f"{c}, bound {climb:+.3f}" for c, climb in flat))
+    grade, evidence = graded_share(compared, PLAIN, cause,
+                                   f"gain, mean ± standard error over seeds: {listing(compared)}")
+    return Claim(*args, rule, f"{evidence}. Point fits are the same for both EMs.", same(grade), "better")
 
 
 def points_nearly_match_at_100(data):
@@ -90,18 +90,24 @@ def points_nearly_match_at_100(data):
         missed = misses(compared[variant])
         ahead = [c for c in missed if c.label.endswith("below")]
         open_gap = [c for c in missed if c.label.endswith("closes half")]
-        parts = []
+        causes, found = [], []  # causes: (label, count, sentence)
         if ahead:
-            parts.append(f"the point fits end level with or above {em(variant)}'s exact mesh "
+            causes.append(("level with or above the exact mesh, not found", len(ahead),
+                           "Cause not found: the point fits end level with or above the exact mesh."))
+            found.append(f"the point fits end level with or above {em(variant)}'s exact mesh "
                          f"({'; '.join(map(str, ahead))})")
         if open_gap:
             gains = "; ".join(f"{c}; points' evaluation {climbs[c.label][0]:+.3f}, bound {climbs[c.label][1]:+.3f}"
                               for c in open_gap)
-            parts.append("where the points keep more than half their gap, their training bound still climbs after "
+            causes.append(("the points fit the points after iteration 25", len(open_gap),
+                           "Where the points keep over half their gap, only their training bound climbs after "
+                           "iteration 25: they fit the points, not the surface."))
+            found.append("where the points keep more than half their gap, their training bound still climbs after "
                          f"iteration 25 but their evaluation does not: they fit the points, not the surface ({gains})")
-        finding = capital("; ".join(parts))
+        finding = "; ".join(found)
         return em_switch(finding, variant, grades, compared) or (
-            f"{finding}." if open_gap else switch_or_not_found(finding, variant, grades, compared))
+            Cause(by_cause(missed, causes), finding) if open_gap
+            else switch_or_not_found(finding, variant, grades, compared))
 
     grades, lines = graded_per_em(comparisons_of, PLAIN, cause, WHAT)
     return Claim(*args, rule, "; ".join(lines) + ".", grades, "nearly as good")
@@ -138,8 +144,8 @@ def converges_in_a_third(data):
                               f"{ROUNDING:g} of {THIRD:g}")
 
     def cause(variant, grades, compared):
-        return switch_or_not_found(f"{capital(em(variant))}'s exact mesh needs {1 / median(ratios[variant]):.2f} times "
-                                   "the points' iterations (median)", variant, grades, compared)
+        return switch_or_not_found(f"{em(variant)}'s exact mesh needs {1 / median(ratios[variant]):.2f} times the "
+                                   "points' iterations (median)", variant, grades, compared)
 
     grades, lines = graded_per_em(comparisons_of, EVERY, cause, WHAT, lambda compared: compared[0].detail)
     return Claim(*args, rule, "; ".join(lines) + ".", grades, "about 1/3", TEXT)
@@ -163,9 +169,9 @@ def converges_faster(data):
     def cause(variant, grades, compared):
         lost = [c for c in compared[variant] if c.outcome == LOSS]
         ties = sum(c.outcome == TIE for c in compared[variant])
-        return switch_or_not_found(f"{capital(em(variant))}'s exact mesh takes about as many iterations as the points "
-                                   f"({ties} of {len(compared[variant])} tied; lost: {'; '.join(map(str, lost))})",
-                                   variant, grades, compared)
+        return switch_or_not_found(f"{em(variant)}'s exact mesh takes about as many iterations as the points ({ties} "
+                                   f"of {len(compared[variant])} tied; lost: {'; '.join(map(str, lost))})", variant,
+                                   grades, compared)
 
     grades, lines = graded_per_em(comparisons_of, PLAIN, cause, WHAT)
     return Claim(*args, rule, "; ".join(lines) + ".", grades, "faster")
@@ -193,7 +199,7 @@ def higher_quality(data):
 
     def cause(variant, grades, compared):
         lost = misses(compared[variant])
-        finding = f"The point inputs match or beat {em(variant)}'s exact mesh ({'; '.join(map(str, lost))})"
+        finding = f"the point inputs match or beat {em(variant)}'s exact mesh ({'; '.join(map(str, lost))})"
         if all(c.label.startswith("random") for c in lost):
             finding += f", from random starts still climbing at iteration 25 ({still_climbing(data, variant)})"
         return switch_or_not_found(finding, variant, grades, compared)

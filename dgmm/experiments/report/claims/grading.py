@@ -119,13 +119,25 @@ def versus_paper(label, ours, published, decimals, *, detail=""):
                   detail=detail or f"ours {ours.value:.{decimals + 1}f}, paper {published:.{decimals}f}")
 
 
+def magnitude(difference):
+    """``|difference|`` of an :class:`Estimate`, with its error: how far apart two means are, either way."""
+    return Estimate(abs(difference.value), difference.error)
+
+
+def bootstrap(statistic, *samples, seed=0):
+    """``statistic(*samples)`` over paired samples (the same registration trials), with its standard error from a
+    seeded paired bootstrap: :data:`BOOTSTRAP` resamples of the pairs, the same for every statistic of the same
+    trials; ``statistic`` takes numpy's ``axis``."""
+    samples = [np.asarray(sample, dtype=float) for sample in samples]
+    picks = np.random.default_rng(seed).integers(0, len(samples[0]), size=(BOOTSTRAP, len(samples[0])))
+    resampled = statistic(*(sample[picks] for sample in samples), axis=1)
+    return Estimate(float(statistic(*samples)), float(np.std(resampled, ddof=1)))
+
+
 def paired_difference(first, second, statistic=np.mean, seed=0):
-    """``statistic(first) − statistic(second)`` over paired samples (the same registration trials), with its
-    standard error from a seeded paired bootstrap of the pairs."""
-    first, second = np.asarray(first, dtype=float), np.asarray(second, dtype=float)
-    picks = np.random.default_rng(seed).integers(0, len(first), size=(BOOTSTRAP, len(first)))
-    resampled = statistic(first[picks], axis=1) - statistic(second[picks], axis=1)
-    return Estimate(float(statistic(first) - statistic(second)), float(np.std(resampled, ddof=1)))
+    """``statistic(first) − statistic(second)`` over paired samples, its standard error from :func:`bootstrap`."""
+    return bootstrap(lambda a, b, axis=None: statistic(a, axis=axis) - statistic(b, axis=axis), first, second,
+                     seed=seed)
 
 
 @dataclass(frozen=True)
@@ -233,7 +245,8 @@ class Grade:
     ours : str
         What decides it, short, for the summary table (no timing numbers: those change from run to run).
     why : str
-        When not reproduced: the measured cause, one sentence; when pending: what is missing.
+        When not reproduced: the measured cause, one short sentence for the summary table (the numbers behind it go
+        to the claim's evidence); when pending: what is missing.
     """
 
     verdict: str

@@ -7,12 +7,16 @@ area and its M-step does not weight by area; it produced the paper's numbers). P
 (textbook EM). The headline verdict is the authors' EM's (``HEADLINE``): a reproduction first asks whether what the
 authors ran gives what they report; the textbook column says whether the method as the paper writes it does too.
 Claims that involve no mixture fitted to a mesh get one verdict in both.
+
+A grade not reproduced names its cause in one sentence (``Grade.why``, for the summary table); the numbers behind
+it, the cells and what was tried, go to the claim's evidence (:class:`Cause`).
 """
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from dgmm.experiments.report.claims.grading import PENDING, REPRODUCED, Grade, TimeRatio, grade_time
+from dgmm.experiments.report.claims.grading import (LOSS, OFTEN_WORDS, PENDING, REPRODUCED, TIE, WIN, Grade, Tally,
+                                                    TimeRatio, compare, estimate, grade_share, grade_time, magnitude)
 from dgmm.experiments.sweep import SIZED, parse_input
 
 VARIANTS = ("authors", "textbook")
@@ -22,6 +26,23 @@ VARIANT_NAMES = {"authors": "authors' EM", "textbook": "textbook EM"}
 FIG3_MODEL = "bunny"
 FIG3_INPUTS = ("res4-exact", "res4-approx", "res4-centroids", "res4-vertices")
 FIG4_INPUTS = ("quadric1000-exact", "clustering1000-exact", "poisson1000-points", "random1000-points")
+HIGH_K = 200
+"""K from which point inputs of 1000 points or fewer collapse from k-means starts (5 points a component or fewer)."""
+SCALING = "the authors' E-step area scaling"
+"""What differs between the two EMs: the authors' E-step multiplies each triangle's Mahalanobis-plus-trace term by its
+area over the smallest area, which sharpens the responsibilities, and their M-step does not weight by area. The sweep
+switches both at once."""
+
+ERROR_NAMES = {"rot": "rotation", "trans": "translation"}
+"""The registration errors (registration.csv's rotation and translation columns)."""
+WRONG_MINIMUM_DEG = 45.0
+"""A trial whose rotation error exceeds this ended farther from the truth than it started, in a wrong local minimum:
+no trial rotates more (three Euler angles of at most 15°, config `registration.max_angle_deg`, compose to a rotation
+of at most their sum)."""
+SIMILAR_TIME = (0.78, 1.28)
+"""Time ratios the paper's "similar", "approximately match" and "roughly match" allow: closer than the 22% that
+§VI-D reports as a difference ("22% faster", a time ratio of 0.78), either way (1 / 0.78 ≈ 1.28). A ratio beyond
+the upper end is "much faster"."""
 
 
 TEXT = "the paper's text"
@@ -78,7 +99,8 @@ class Claim:
 
     @property
     def why(self):
-        """The cause of every grade not reproduced, each named by its EM when the two EMs' causes differ."""
+        """The cause of every grade not reproduced, one sentence each, named by its EM when the two EMs' causes
+        differ."""
         causes = {v: self.grades[v].why for v in VARIANTS if self.grades[v].verdict != REPRODUCED
                   and self.grades[v].why}
         if len(set(causes.values())) == 1 and len(causes) == len(VARIANTS):
@@ -125,19 +147,214 @@ def pending(section, figure, title, rule, what, paper="", source=WORDS):
     return Claim(section, figure, title, rule, f"waiting for data: {what}.", same(missing(what)), paper, source)
 
 
+def capital(text):
+    """``text`` with its first letter upper case."""
+    return text[:1].upper() + text[1:]
+
+
 def sentence(text):
     """``text`` as a sentence: first letter upper case, a final full stop ("" stays "")."""
-    return f"{text[0].upper()}{text[1:]}." if text else ""
+    return f"{capital(text)}." if text else ""
 
 
-def fitted_variant(input_name, variant):
-    """The EM variant whose fits of ``input_name`` stand for ``variant``: points are textbook EM in both."""
-    return variant if parse_input(input_name)[1] in SIZED else "textbook"
+def em(variant):
+    """The EM's name inside a sentence: "the authors' EM", "textbook EM"."""
+    return f"the {VARIANT_NAMES[variant]}" if variant == "authors" else VARIANT_NAMES[variant]
+
+
+def other_em(variant):
+    """The other EM variant of ``VARIANTS``."""
+    return next(other for other in VARIANTS if other != variant)
 
 
 def is_mesh(input_name):
     """Whether an input is fitted as sized primitives (exact or approximate triangles)."""
     return parse_input(input_name)[1] in SIZED
+
+
+def fitted_variant(input_name, variant):
+    """The EM variant whose fits of ``input_name`` stand for ``variant``: points are textbook EM in both."""
+    return variant if is_mesh(input_name) else "textbook"
+
+
+def wrong_minima(rotation_errors):
+    """Trials (a boolean mask) that ended in a wrong local minimum: rotation error beyond :data:`WRONG_MINIMUM_DEG`."""
+    return np.asarray(rotation_errors) > WRONG_MINIMUM_DEG
+
+
+# -- causes -----------------------------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Cause:
+    """Why a grade is not reproduced.
+
+    Attributes
+    ----------
+    why : str
+        The measured cause in one short sentence, for the summary table (``Grade.why``).
+    finding : str
+        What was measured behind it (the cells, the numbers, what was tried), a clause for the claim's evidence;
+        "" when the sentence says it all.
+    """
+
+    why: str
+    finding: str = ""
+
+
+def explained(evidence, cause):
+    """``evidence`` with the finding behind ``cause`` appended (unchanged when it has none)."""
+    return f"{evidence}; cause: {cause.finding}" if cause is not None and cause.finding else evidence
+
+
+def graded_share(comparisons, quantifier, cause, evidence=""):
+    """``(Grade, evidence)`` of a share rule: ``cause``'s sentence in the grade and its finding in the evidence
+    when the verdict is not reproduced."""
+    grade = grade_share(comparisons, quantifier, cause.why)
+    return grade, evidence if grade.verdict == REPRODUCED else explained(evidence, cause)
+
+
+def misses(comparisons):
+    """What keeps a share from being reproduced: its lost comparisons, or its tied ones when none is lost."""
+    lost = [c for c in comparisons if c.outcome == LOSS]
+    return lost or [c for c in comparisons if c.outcome == TIE]
+
+
+def switched(compared, variant, other):
+    """Labels of the comparisons ``variant`` does not win and ``other`` wins: the same comparison, only the EM
+    changed."""
+    won = {c.label for c in compared.get(other) or [] if c.outcome == WIN}
+    return [c.label for c in compared[variant] if c.outcome != WIN and c.label in won]
+
+
+def _how_many(part, whole):
+    """``"the one"``, ``"all 3"`` or ``"2 of the 3"`` comparisons."""
+    return ("the one comparison" if whole == 1 else f"all {whole} comparisons" if part == whole
+            else f"{part} of the {whole} comparisons")
+
+
+def _not_won(comparisons):
+    """What an EM does with the comparisons it does not win: "ties", "loses" or "does not win"."""
+    outcomes = {c.outcome for c in comparisons}
+    return "ties" if outcomes == {TIE} else "loses" if outcomes == {LOSS} else "does not win"
+
+
+def em_switch(finding, variant, grades, compared):
+    """A :class:`Cause` that is the EM: the other EM wins, on the same data from the same start method (seeds differ
+    by EM), comparisons that ``variant`` does not; ``finding`` (what ``variant``'s fits do, with their numbers) and
+    the other EM's grade go to the evidence. None when the other EM wins none of them."""
+    other = other_em(variant)
+    flipped = switched(compared, variant, other)
+    if not flipped:
+        return None
+    missed = [c for c in compared[variant] if c.outcome != WIN]
+    return Cause(f"{capital(SCALING)}: {em(other)} wins {_how_many(len(flipped), len(missed))} this EM "
+                 f"{_not_won(missed)}.",
+                 f"{finding}; {em(other)} on the same data and start method wins {len(flipped)} of the {len(missed)} "
+                 f"({grades[other].ours}, {grades[other].verdict}): {SCALING}, with their unweighted M-step, is the "
+                 "switch")
+
+
+def by_cause(missed, causes):
+    """One sentence for the comparisons ``missed`` (all lost or all tied, :func:`misses`) that several causes share:
+    ``causes`` lists ``(label, count, sentence)``; one cause gives its own sentence, several their labels and counts
+    (their numbers are in the evidence)."""
+    if len(causes) == 1:
+        return causes[0][2]
+    return (f"{len(missed)} comparisons {missed[0].outcome}, by cause: "
+            + "; ".join(f"{label} ({count})" for label, count, _ in causes) + ".")
+
+
+def conjoined(names):
+    """``"a"``, ``"a and b"``, ``"a, b and c"``."""
+    names = list(names)
+    return " and ".join(filter(None, (", ".join(names[:-1]), names[-1]))) if names else ""
+
+
+def switch_or_not_found(finding, variant, grades, compared):
+    """:func:`em_switch` when the other EM wins what ``variant`` does not, else "cause not found" (the other EM was
+    tried), with ``finding`` for the evidence."""
+    missed = [c for c in compared[variant] if c.outcome != WIN]
+    return em_switch(finding, variant, grades, compared) or Cause(
+        f"Cause not found: {em(other_em(variant))} on the same data and starts does not win "
+        f"{'it' if len(missed) == 1 else 'them'} either.", finding)
+
+
+# -- the likelihood claims' evidence and grades ---------------------------------------------------------------------
+
+SPELLED = 14
+"""A share's evidence spells out every comparison up to this many (beyond it, the tied and lost ones)."""
+
+
+def listing(comparisons, spelled=SPELLED):
+    """Evidence of a share: every comparison with its numbers and outcome when there are at most ``spelled``,
+    else the number won and every tied and lost one."""
+    if len(comparisons) <= spelled:
+        return "; ".join(f"{comparison} ({comparison.outcome})" for comparison in comparisons)
+    tally = Tally(tuple(comparisons))
+    parts = [f"{len(tally.of(WIN))} won"]
+    for outcome in (TIE, LOSS):
+        if tally.of(outcome):
+            parts.append(f"{len(tally.of(outcome))} {outcome} ({'; '.join(map(str, tally.of(outcome)))})")
+    return ", ".join(parts)
+
+
+def unwon(comparisons):
+    """The comparisons not won, for evidence that lists the numbers elsewhere ("" when every one is won)."""
+    lost = [str(c) for c in comparisons if c.outcome == LOSS]
+    tied = [c.label for c in comparisons if c.outcome == TIE]
+    return "".join(f"; {kind}: {', '.join(items)}" for kind, items in (("lost", lost), ("tied", tied)) if items)
+
+
+def graded_per_em(comparisons_of, quantifier, cause, what, ours=None):
+    """Grades and evidence lines of a share rule graded on each EM's fits.
+
+    Parameters
+    ----------
+    comparisons_of : callable
+        ``comparisons_of(variant) -> (comparisons, evidence)``; no comparisons when that EM's fits are missing.
+    quantifier : Quantifier
+    cause : callable
+        ``cause(variant, grades, compared) -> Cause`` of a grade not reproduced. It sees both EMs' grades and
+        comparisons (``variant -> list``), so that a cause can be the other EM's result on the same data and starts.
+    what : str
+        The fits the claim needs, for a pending grade.
+    ours : callable, optional
+        ``ours(comparisons) -> str``, the grade's short number in place of the share's count (for a claim of one
+        comparison).
+
+    Returns
+    -------
+    grades : dict
+        ``variant -> Grade``, each not reproduced with its cause's sentence.
+    lines : list of str
+        ``"<EM>: <evidence>"`` of every EM that had fits, with its cause's finding.
+    """
+    grades, compared, evidence = {}, {}, {}
+    for variant in VARIANTS:
+        compared[variant], evidence[variant] = comparisons_of(variant)
+        if not compared[variant]:
+            grades[variant] = missing(what)
+            continue
+        grades[variant] = grade_share(compared[variant], quantifier)
+        if ours is not None:
+            grades[variant] = replace(grades[variant], ours=ours(compared[variant]))
+    causes = {variant: cause(variant, grades, compared) for variant, grade in grades.items()
+              if grade.verdict not in (REPRODUCED, PENDING)}
+    lines = [f"{VARIANT_NAMES[variant]}: {explained(evidence[variant], causes.get(variant))}" for variant in VARIANTS
+             if compared[variant]]
+    return {variant: replace(grade, why=causes[variant].why) if variant in causes else grade
+            for variant, grade in grades.items()}, lines
+
+
+def still_climbing(data, variant, k=100):
+    """The mean evaluation log-likelihood of res4's exact mesh from random starts at 25 iterations and at the end of
+    convergence.csv's fits, as words: how far those fits still had to go at the paper's 25."""
+    rows = [row for row in data.convergence or [] if row["input"] == "res4-exact" and row["variant"] == variant
+            and row["init"] == "random" and int(row["K"]) == k]
+    if not rows:
+        return "convergence.csv missing"
+    early, final = (estimate([float(row[column]) for row in rows]) for column in ("eval_ll_25", "eval_ll_final"))
+    return f"res4-exact's random starts at K={k} score {early:.2f} at iteration 25 and {final:.2f} after 100"
 
 
 def cells(estimates, model, inputs, variant):
@@ -168,15 +385,70 @@ def median(values):
     return float(np.median(values))
 
 
-def mean(values):
-    return float(np.mean(values))
+# -- shared claims: the start-method contrasts of Fig 3 and Fig 4 ---------------------------------------------------
+
+def init_contrast(data, args, inputs, quantifier, paper_words):
+    """Mesh inputs are (largely) invariant to the start where point inputs are not: per (mesh input, point input,
+    K), the mesh's |kmeans − random| is below the point input's: the contrast the paper draws."""
+    mesh, points = tuple(n for n in inputs if is_mesh(n)), tuple(n for n in inputs if not is_mesh(n))
+    rule = (f"share, {quantifier.name}: one (mesh input, point input, K), the point input's |kmeans − random| − the "
+            "mesh input's > 0")
+
+    def comparisons_of(variant):
+        gaps = init_gaps(data.estimates, FIG3_MODEL, inputs, variant)
+        compared = [compare(f"{name} vs {other} K={k}", magnitude(gaps[other, k]) - magnitude(gap),
+                            detail=f"{gap:+.3f} vs {gaps[other, k]:+.3f}")
+                    for (name, k), gap in gaps.items() if name in mesh for other in points if (other, k) in gaps]
+        return compared, (f"median |kmeans − random| meshes {_median_gap(gaps, mesh):.3f}, points "
+                          f"{_median_gap(gaps, points):.3f} nat; kmeans − random, mesh vs point input: "
+                          + listing(compared)) if compared else ""
+
+    def cause(variant, grades, compared):
+        gaps = init_gaps(data.estimates, FIG3_MODEL, inputs, variant)
+        finding = (f"{em(variant)}'s random starts end a median {_median_gap(gaps, mesh):.2f} nat below k-means on "
+                   f"the meshes, as far as on the points ({_median_gap(gaps, points):.2f}), still short of convergence "
+                   f"at iteration 25 ({still_climbing(data, variant)})")
+        return switch_or_not_found(finding, variant, grades, compared)
+
+    grades, lines = graded_per_em(comparisons_of, quantifier, cause, "mesh and point fits from both starts")
+    return Claim(*args, rule, "; ".join(lines) + ".", grades, paper_words)
+
+
+def _median_gap(gaps, names):
+    """Median |kmeans − random| over the (input, K) of ``names``."""
+    return median([abs(gap.value) for (name, _), gap in gaps.items() if name in names])
+
+
+def prefer_an_init(data, args, inputs, towards_kmeans, paper_words):
+    """Point inputs "often" prefer a start: per (point input, K), kmeans − random beyond its band either way, or
+    towards k-means (``towards_kmeans``); point fits are textbook EM in both EMs' grades."""
+    bars = "" if towards_kmeans else "|"
+    rule = f"share, often: one (point input, K), {bars}kmeans − random{bars} > 0"
+    gaps = init_gaps(data.estimates, FIG3_MODEL, inputs, "textbook")
+    if not gaps:
+        return pending(*args, rule, "point fits from both starts in likelihood.csv", paper_words)
+    compared = [compare(f"{name} K={k}", gap if towards_kmeans else magnitude(gap), detail=f"{gap:+.3f}")
+                for (name, k), gap in gaps.items()]
+    grade, evidence = graded_share(compared, OFTEN_WORDS, _prefer_cause(compared, towards_kmeans),
+                                   f"kmeans − random: {listing(compared)}")
+    return Claim(*args, rule, f"{evidence}. Point fits are the same for both EMs.", same(grade), paper_words)
+
+
+def _prefer_cause(compared, towards_kmeans):
+    """Why point inputs do not often prefer (k-means): collapse of k-means starts at high K, when that is where the
+    comparisons are lost."""
+    lost = [c for c in compared if c.outcome != WIN]
+    if towards_kmeans and lost and all(c.margin < 0 for c in lost):
+        return Cause("K-means-started point fits collapse at high K and end below the random starts.",
+                     f"the k-means starts end below the random ones at {'; '.join(map(str, lost))}")
+    return Cause("Cause not found: the point fits end as high from either start.")
 
 
 MIN_REPEATS = 6
 """Fewest repeats a timing claim needs: below it no 95% interval of a median exists."""
 
 
-def timing_claim(data, section, figure, title, check, ratio, target, paper, source=WORDS, cause=""):
+def timing_claim(data, section, figure, title, check, ratio, target, paper, source=WORDS, cause=Cause("")):
     """A claim graded by the time-ratio rule on one check of timing_seconds.csv.
 
     Parameters
@@ -187,8 +459,9 @@ def timing_claim(data, section, figure, title, check, ratio, target, paper, sour
         ``(numerator, denominator)`` settings of the check.
     target : tuple of float
         ``(low, high)``: the range the claim puts the ratio in.
-    cause : str
-        Why, when the verdict is not reproduced: a cause that holds whatever the run's numbers (no numbers).
+    cause : Cause
+        Why, when the verdict is not reproduced: a sentence that holds whatever the run's seconds (no timing
+        numbers; deterministic counts are fine); its finding is the claim's evidence.
     """
     low, high = target
     bound = f"< {high:g}" if low == 0 else f"> {low:g}" if high == float("inf") else f"in [{low:g}, {high:g}]"
@@ -202,4 +475,14 @@ def timing_claim(data, section, figure, title, check, ratio, target, paper, sour
                data.seconds(check).items()}
     timings = f"{ratio[0]} / {ratio[1]}: {measured}; median CPU time " + ", ".join(
         f"{setting} {value * 1000:.3g} ms" for setting, value in seconds.items())
-    return Claim(section, figure, title, rule, "", same(grade_time(measured, cause)), paper, source, timings)
+    return Claim(section, figure, title, rule, sentence(cause.finding), same(grade_time(measured, cause.why)), paper,
+                 source, timings)
+
+
+def beside(claim, data, check, ratio, name):
+    """``claim`` (a :func:`timing_claim`) with another ratio of its timing check in its timings, ungraded (ours
+    beside the paper's setup); unchanged while the check has too few repeats."""
+    ratios = data.time_ratios(check, *ratio)
+    if len(ratios) < MIN_REPEATS or not claim.timings:
+        return claim
+    return replace(claim, timings=f"{claim.timings}; {name}, {ratio[0]} / {ratio[1]}: {TimeRatio(ratios)}")

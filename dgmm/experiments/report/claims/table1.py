@@ -7,11 +7,11 @@ trials). "Significantly" is read as beyond that band: the paper gives no size fo
 import numpy as np
 
 from dgmm.experiments.report import paper
-from dgmm.experiments.report.claims.grading import (EVERY, LOSS, OFTEN_WORDS, PLAIN, WIN, compare, grade_share,
+from dgmm.experiments.report.claims.grading import (EVERY, LOSS, OFTEN_WORDS, PLAIN, TIE, WIN, bootstrap, compare,
                                                     paired_difference, versus_paper)
-from dgmm.experiments.report.claims.registration import (ERROR_NAMES, WRONG_MINIMUM_DEG, bootstrap, unwon,
-                                                         wrong_minima)
-from dgmm.experiments.report.claims.rules import TEXT, WORDS, Claim, fitted_variant, missing, per_variant, sentence
+from dgmm.experiments.report.claims.rules import (ERROR_NAMES, TEXT, WORDS, WRONG_MINIMUM_DEG, Cause, Claim,
+                                                  conjoined, fitted_variant, graded_share, missing, per_variant, unwon,
+                                                  wrong_minima)
 from dgmm.experiments.report.tables import FIG5_MESH, TABLE1_FIT, TABLE1_INPUTS, TABLE1_METHODS, table1_mesh
 
 KINDS = ("points", "mesh")
@@ -49,20 +49,20 @@ def _trials(data, variant):
     return result
 
 
-def percent_of_icp(errors, reference, axis=None):
+def _percent_of_icp(errors, reference, axis=None):
     """Table 1's registration measure: the mean error as % of ICP's mean error over the same trials."""
     return 100.0 * np.mean(errors, axis=axis) / np.mean(reference, axis=axis)
 
 
 def _graded(data, args, rule, comparisons_of, quantifier, table, paper_words, source, what, cause):
     """A Table 1 claim graded per EM: ``comparisons_of(variant)`` gives its comparisons (none: no data),
-    ``table(variant)`` the evidence line's numbers, ``cause(variant, comparisons)`` the why."""
+    ``table(variant)`` the evidence line's numbers, ``cause(variant, comparisons)`` the :class:`~.rules.Cause`."""
 
     def grade(variant):
         comparisons = comparisons_of(variant)
         if not comparisons:
             return missing(what)
-        return grade_share(comparisons, quantifier, cause(variant, comparisons)), table(variant) + unwon(comparisons)
+        return graded_share(comparisons, quantifier, cause(variant, comparisons), table(variant) + unwon(comparisons))
 
     grades, lines = per_variant(grade)
     return Claim(*args, rule, "; ".join(lines) + ".", grades, paper_words, source)
@@ -83,14 +83,15 @@ def _likelihood_table(data, variant):
 
 def _fitted_better(variant, comparisons):
     """Cause of a likelihood comparison not won: where the points GMM fits as well (no check measures why)."""
-    models = ", ".join(c.label for c in comparisons if c.outcome != WIN)
-    return f"Cause not found: the points GMM fits {models} as well as the mesh GMM (the tables hold only the fits)."
+    models = conjoined(c.label for c in comparisons if c.outcome != WIN)
+    return Cause(f"Cause not found: the points GMM fits {models} as well as the mesh GMM (the tables hold only the "
+                 "fits).")
 
 
 def mesh_likelihood_higher(data):
     """§VI-C: "In all our experiments, the mesh-based GMM always outperformed the point-based one" (likelihood)."""
     return _graded(data, ("§VI-C", "Table 1", "The mesh GMM has a higher likelihood than the points GMM on every "
-                          "model"), "comparison per model, every: mesh > points (band: seed spread)",
+                          "model"), "share, every: one model, mesh > points likelihood (band: seed spread)",
                    lambda variant: _likelihood_margins(data, variant), EVERY,
                    lambda variant: _likelihood_table(data, variant), "always", WORDS, LIKELIHOODS, _fitted_better)
 
@@ -99,7 +100,7 @@ def likelihood_margins(data):
     """§VI-C: the mesh-based GMM outperformed the point-based one, "often significantly" (likelihood)."""
     margins = [row[COLUMNS["ll", "mesh"]] - row[COLUMNS["ll", "points"]] for row in paper.TABLE1.values()]
     return _graded(data, ("§VI-C", "Table 1", "The likelihood margins are often significant"),
-                   "comparison per model, often: mesh > points beyond the band (seed spread)",
+                   "share, often: one model, mesh > points likelihood beyond the band (seed spread)",
                    lambda variant: _likelihood_margins(data, variant), OFTEN_WORDS,
                    lambda variant: "mesh − points " + ", ".join(
                        f"{c.label} {c.margin:+.2f} ± {c.band:.2f}" for c in _likelihood_margins(data, variant)),
@@ -117,9 +118,11 @@ def _decimation_cause(data, variant, comparisons):
     missed = [key for key in decimated if outcomes[key] == LOSS]
     below = sum(fits[m][kind].value < paper.TABLE1[m][COLUMNS["ll", kind]] for m, kind in missed)
     matches = lambda keys: sum(outcomes[key] == WIN for key in keys)  # noqa: E731
-    return (f"Our decimations: on the bunny, whose res4 mesh the authors used too, {matches(bunny)} of "
-            f"{len(bunny)} values match, on the models our data stage decimated {matches(decimated)} of "
-            f"{len(decimated)} (ours below the paper's in {below} of the {len(missed)} misses).")
+    return Cause(f"Our decimations: {matches(bunny)} of {len(bunny)} values match on the bunny's res4 mesh (the "
+                 f"authors' too), {matches(decimated)} of {len(decimated)} on the models we decimated.",
+                 f"on the bunny, whose res4 mesh the authors used too, {matches(bunny)} of {len(bunny)} values match, "
+                 f"on the models our data stage decimated {matches(decimated)} of {len(decimated)} (ours below the "
+                 f"paper's in {below} of the {len(missed)} misses)")
 
 
 def likelihood_values(data):
@@ -129,7 +132,8 @@ def likelihood_values(data):
                 for model, fits in _likelihoods(data, variant).items() for kind in KINDS]
 
     return _graded(data, ("§VI-C", "Table 1", "Our likelihoods match the paper's per model"),
-                   "equivalence, plain: ours within its tie band (seed spread) plus the paper's rounding (0.05 nat)",
+                   "equivalence, plain: one (model, GMM), ours within its tie band (seed spread) plus the paper's "
+                   "rounding (0.05 nat)",
                    comparisons_of, PLAIN, lambda variant: f"{sum(c.outcome == WIN for c in comparisons_of(variant))}"
                    f" of {len(comparisons_of(variant))} match", "Table 1 values", TEXT, LIKELIHOODS,
                    lambda variant, comparisons: _decimation_cause(data, variant, comparisons))
@@ -150,13 +154,13 @@ def _percent_table(data, variant):
     trials end in wrong local minima, with the coarse-to-fine P2D's % on the same mixture."""
     trials = _trials(data, variant)
     cells = "; ".join(f"{model} " + ", ".join(
-        f"{ERROR_NAMES[name]} " + " / ".join(f"{percent_of_icp(t[kind][name], t['reference'][name]):.0f}"
+        f"{ERROR_NAMES[name]} " + " / ".join(f"{_percent_of_icp(t[kind][name], t['reference'][name]):.0f}"
                                              for kind in ("mesh", "points")) for name in ERROR_NAMES)
         for model, t in trials.items())
     notes = [f"{model}: {wrong_minima(t['mesh']['rot']).sum()} of {len(t['mesh']['rot'])} mesh GMM trials in a wrong "
              f"local minimum (rotation error {t['mesh']['rot'].max():.0f}° > {WRONG_MINIMUM_DEG:g}°)"
              + ("" if t.get("mesh_c2f") is None else ", coarse-to-fine P2D on the same mixture "
-                f"{percent_of_icp(t['mesh_c2f']['rot'], t['reference']['rot']):.0f}% rotation")
+                f"{_percent_of_icp(t['mesh_c2f']['rot'], t['reference']['rot']):.0f}% rotation")
              for model, t in trials.items() if wrong_minima(t["mesh"]["rot"]).any()]
     return f"% of ICP, mesh / points: {cells}" + "".join(f" ({note})" for note in notes)
 
@@ -173,20 +177,36 @@ def _c2f_wins(data, variant, label):
 
 def _registration_cause(data, variant, comparisons):
     """Cause of registration comparisons not won: wrong local minima of the paper's P2D when the coarse-to-fine P2D
-    on the same mixture and trials wins them, else not found."""
-    unsettled = [c.label for c in comparisons if c.outcome != WIN]
-    if unsettled and all(_c2f_wins(data, variant, label) for label in unsettled):
-        return sentence(f"Wrong local minima of the paper's P2D (one BFGS from the identity): the coarse-to-fine P2D "
-                        f"on the same mixture and trials wins {', '.join(unsettled)}")
-    return f"Cause not found for {', '.join(unsettled)} (tried: the coarse-to-fine P2D on the same mixture)."
+    on the same mixture and trials wins them (naming the models' trials stuck in one), else not found."""
+    unsettled = [c for c in comparisons if c.outcome != WIN]
+    labels = ", ".join(c.label for c in unsettled)
+    if not (unsettled and all(_c2f_wins(data, variant, c.label) for c in unsettled)):
+        return Cause("Cause not found (tried: the coarse-to-fine P2D on the same mixture and trials).",
+                     f"not found for {labels}")
+    noun = "tie" if all(c.outcome == TIE for c in unsettled) else "comparison"
+    turned = "coarse-to-fine P2D on the same mixture turns its " + (
+        f"one {noun} into a win" if len(unsettled) == 1 else f"{len(unsettled)} {noun}s into wins")
+    trials = _trials(data, variant)
+    stuck = {model: trials[model]["mesh"]["rot"] for model in dict.fromkeys(c.label.split()[0] for c in unsettled)
+             if wrong_minima(trials[model]["mesh"]["rot"]).any()}
+    finding = (f"wrong local minima of the paper's P2D (one BFGS from the identity): the coarse-to-fine P2D on the "
+               f"same mixture and trials wins {labels}")
+    if not stuck:
+        return Cause(f"Wrong local minima of the paper's P2D (one BFGS from the identity): {turned}.", finding)
+    count, worst = sum(int(wrong_minima(rot).sum()) for rot in stuck.values()), max(rot.max() for rot in stuck.values())
+    if len(stuck) > 1:
+        return Cause(f"{count} trials of {conjoined(stuck)} stuck in wrong local minima (up to {worst:.0f}°): "
+                     f"{turned}.", finding)
+    trapped = f"one trial stuck at {worst:.0f}°" if count == 1 else f"{count} trials stuck at up to {worst:.0f}°"
+    return Cause(f"{next(iter(stuck)).capitalize()}'s {trapped} in a wrong local minimum: {turned}.", finding)
 
 
 def mesh_registers_better(data):
     """§VI-C: "In all our experiments, the mesh-based GMM always outperformed the point-based one" (registration;
     Table 1 also puts every mesh GMM error below ICP's 100%)."""
-    return _graded(data, ("§VI-C", "Table 1", "The mesh GMM registers with lower errors than the points GMM and ICP "
-                          "on every model"),
-                   "comparison per (model, error, other), every: mesh mean error < points GMM's, ICP's (band: paired "
+    return _graded(data, ("§VI-C", "Table 1", "The mesh GMM registers better than the points GMM and ICP on every "
+                          "model"),
+                   "share, every: one (model, error, other), mesh mean error < the points GMM's, ICP's (band: paired "
                    "bootstrap)", lambda variant: _mesh_below(data, variant, tuple(OTHER_NAMES)), EVERY,
                    lambda variant: _percent_table(data, variant), "always", WORDS, ERRORS,
                    lambda variant, comparisons: _registration_cause(data, variant, comparisons))
@@ -197,7 +217,7 @@ def registration_margins(data):
     ratios = [paper.TABLE1[m][COLUMNS[name, "mesh"]] / paper.TABLE1[m][COLUMNS[name, "points"]]
               for m in paper.TABLE1 for name in ERROR_NAMES]
     return _graded(data, ("§VI-C", "Table 1", "The registration margins over the points GMM are often significant"),
-                   "comparison per (model, error), often: mesh mean error < points GMM's beyond the band (paired "
+                   "share, often: one (model, error), mesh mean error < the points GMM's beyond the band (paired "
                    "bootstrap)", lambda variant: _mesh_below(data, variant, ("points",)), OFTEN_WORDS,
                    lambda variant: _percent_table(data, variant),
                    f"often significantly (mesh / points {min(ratios):.2f} to {max(ratios):.2f})", TEXT, ERRORS,
@@ -212,7 +232,8 @@ def _icp_cause(data, variant, comparisons):
         "; ICP: on the bunny, the one model with the paper's absolute errors (Fig 5), our ICP's mean errors are "
         + " / ".join(f"{np.mean(icp[name]) / value:.2f}" for name, value in zip(ERROR_NAMES, paper.FIG5_MEANS["icp"]))
         + " times the paper's")
-    return f"Cause not found (tried: both EMs' mixtures, the points GMM and ICP being the same in both{scale})."
+    return Cause("Cause not found (tried both EMs' mixtures; the points GMM and ICP are the same in both).",
+                 f"not found (tried: both EMs' mixtures, the points GMM and ICP being the same in both{scale})")
 
 
 def registration_values(data):
@@ -220,14 +241,14 @@ def registration_values(data):
     percent: the counterpart of :func:`likelihood_values`."""
     def comparisons_of(variant):
         return [versus_paper(f"{model} {ERROR_NAMES[name]} {kind}",
-                             bootstrap(percent_of_icp, trials[kind][name], trials["reference"][name]),
+                             bootstrap(_percent_of_icp, trials[kind][name], trials["reference"][name]),
                              paper.TABLE1[model][COLUMNS[name, kind]], 0)
                 for model, trials in _trials(data, variant).items() for name in ERROR_NAMES for kind in KINDS]
 
     return _graded(data, ("§VI-C", "Table 1", "Our registration errors (% of ICP) match the paper's per model"),
-                   "equivalence, plain: ours within its tie band (bootstrap over trials) plus the paper's rounding "
-                   "(0.5%)", comparisons_of, PLAIN, lambda variant: _percent_table(data, variant), "Table 1 values",
-                   TEXT, ERRORS, lambda variant, comparisons: _icp_cause(data, variant, comparisons))
+                   "equivalence, plain: one (model, error, GMM), ours within its tie band (bootstrap over trials) plus "
+                   "the paper's rounding (0.5%)", comparisons_of, PLAIN, lambda variant: _percent_table(data, variant),
+                   "Table 1 values", TEXT, ERRORS, lambda variant, comparisons: _icp_cause(data, variant, comparisons))
 
 
 CLAIMS = (mesh_likelihood_higher, likelihood_margins, likelihood_values, mesh_registers_better, registration_margins,

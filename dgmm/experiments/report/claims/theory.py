@@ -5,7 +5,7 @@ from dataclasses import replace
 import numpy as np
 
 from dgmm.experiments.report.claims.grading import BAND_ERRORS, EVERY, estimate, grade_share, within
-from dgmm.experiments.report.claims.rules import TEXT, VARIANT_NAMES, Claim, pending, same, timing_claim
+from dgmm.experiments.report.claims.rules import VARIANT_NAMES, WORDS, Cause, Claim, pending, same, timing_claim
 from dgmm.experiments.report.tables import fig2_bars
 from dgmm.experiments.shared_responsibility import PER_POINT_MEASURE
 
@@ -30,53 +30,53 @@ def triangle_equals_points(data):
     largest = max(int(row["n"]) for row in data.fig2 if row["measure"] == "points")
     draws = [float(row["expected"]) for row in data.fig2 if row["measure"] == "points" and row["n"] == str(largest)]
     sampled, noise = float(np.mean(draws)), BAND_ERRORS * float(np.std(draws, ddof=1))
-    rule = (f"equivalence: triangle − {largest:,} sampled points (mean of {len(draws)} draws) within the noise of one "
-            f"draw ({BAND_ERRORS:g} standard deviations, {noise:.3f} nat), in the paper's plotted quantity "
-            "Σᵢ ηᵢₚ log ρᵢₚ")
+    rule = (f"equivalence: triangle − {largest:,} sampled points (mean of {len(draws)} draws) within "
+            f"{BAND_ERRORS:g} standard deviations of one draw ({noise:.3f} nat), in Σᵢ ηᵢₚ log ρᵢₚ")
     comparison = within("triangle − sampled points", triangle, sampled, noise)
     per_point = _fig2_estimate(data.fig2, PER_POINT_MEASURE)
     cause = ""
     if per_point is not None:
         switched = within("per-point responsibilities − sampled points", per_point.value, sampled, noise)
-        cause = (f"One responsibility shared across each triangle (eq. 11's ηᵢⱼ): with a responsibility per point in "
-                 f"the same triangles the gap is {per_point.value - sampled:+.3f} nat and the comparison is "
-                 f"{switched.outcome}.")
+        cause = (f"One responsibility shared across each triangle (eq. 11's ηᵢⱼ): with one per point the gap is "
+                 f"{per_point.value - sampled:+.3f} nat and the comparison is {switched.outcome}.")
     evidence = (f"triangle {triangle:.3f}, {largest:,} sampled points {sampled:.3f} (difference "
                 f"{triangle - sampled:+.3f}), all the fitted points {fitted:.3f}"
-                + (f", triangle with per-point responsibilities {per_point.value:.3f}" if per_point else "")
+                + (f", triangle with a responsibility per point in the same triangles {per_point.value:.3f}"
+                   if per_point else "")
                 + ". One mixture fitted to points: the same for both EMs.")
     grade = grade_share([comparison], EVERY, cause)
-    return Claim(*args, rule, evidence, same(replace(grade, ours=f"{triangle - sampled:+.3f} nat")), "equal", TEXT)
+    return Claim(*args, rule, evidence, same(replace(grade, ours=f"{triangle - sampled:+.3f} nat")), "equal", WORDS)
 
 
 def invariant_to_resampling(data):
     """§II and §VII: the product integral "is invariant to resampling (such as triangles being merged or split
     while retaining the same overall 3D structure)"."""
     args = ("§II", "", "The product integral is invariant to resampling (every triangle split in four)")
-    rule = (f"equivalence: each component's integral Σₚ αₚ E_p[log N_i] over the split mesh equals that over the "
-            f"original within {ROUNDING:g} nat, for every fitted mixture; the claim is about the integral, so the "
-            "refitted mixtures' change is context")
+    rule = (f"equivalence, every: one fitted mixture, each component's integral Σₚ αₚ E_p[log N_i], split mesh − "
+            f"original, within {ROUNDING:g} nat")
     if data.resampling is None:
-        return pending(*args, rule, "resampling.csv (config section `checks.resampling`)", "same answer", TEXT)
+        return pending(*args, rule, "resampling.csv (config section `checks.resampling`)", "same answer")
     grades, lines = {}, []
     for variant in ("authors", "textbook"):
         rows = [row for row in data.resampling if row["variant"] == variant]
         comparisons = [within(f"seed {row['seed']}", float(row["component_gap"]), 0.0, ROUNDING) for row in rows]
         largest = max(float(row["component_gap"]) for row in rows)
         refit = estimate([float(row["eval_gap"]) for row in rows])
-        lines.append(f"{VARIANT_NAMES[variant]}: integrals change ≤ {largest:.1e}; mixtures refitted to the split mesh score "
-                     f"{refit:+.3f} ± {refit.error:.3f} nat (one responsibility per smaller triangle tightens the EM "
-                     f"bound by {estimate([float(row['bound_gap']) for row in rows]):+.3f})")
+        lines.append(f"{VARIANT_NAMES[variant]}: integrals change ≤ {largest:.1e}; mixtures refitted to the split mesh "
+                     f"score {refit:+.3f} ± {refit.error:.3f} nat (one responsibility per smaller triangle tightens "
+                     f"the EM bound by {estimate([float(row['bound_gap']) for row in rows]):+.3f})")
         grades[variant] = grade_share(comparisons, EVERY, "The integrals change beyond rounding.")
-    return Claim(*args, rule, "; ".join(lines) + " (split − original).", grades, "same answer", TEXT)
+    return Claim(*args, rule, "; ".join(lines) + " (split − original). The claim is about the integral, so the "
+                 "refitted mixtures' change is context.", grades, "same answer", WORDS)
 
 
 def approximation_is_fast(data):
     """§VII: "providing a fast approximation to our proposed method" (the area × centroid fit, eq. 5)."""
     return timing_claim(data, "§VII", "", "The area × centroid approximation is a fast approximation of the exact "
-                        "fit", "approximation", ("approx", "exact"), (0.0, 1.0), "faster", TEXT,
-                        "Both fits cost the same matrix products per iteration: the exact fit's covariance term is "
-                        "one more (K × 9) product, small beside the E-step's Mahalanobis terms.")
+                        "fit", "approximation", ("approx", "exact"), (0.0, 1.0), "faster", WORDS,
+                        Cause("Both fits cost the same matrix products per iteration, bar one small (K × 9) product.",
+                              "per iteration both fits do the same matrix products; the exact fit's covariance term "
+                              "is one more (K × 9) product, small beside the E-step's Mahalanobis terms"))
 
 
 IDENTITIES = "identities.csv (config section `checks.identities`)"
@@ -87,20 +87,20 @@ def _identity(data, section, title, identity, paper_words, figure=""):
     rule = f"equivalence: the two sides, computed independently, agree within {ROUNDING:g} (relative) in every case"
     rows = [row for row in data.identities or [] if row["identity"] == identity]
     if not rows:
-        return pending(section, figure, title, rule, IDENTITIES, paper_words, TEXT)
+        return pending(section, figure, title, rule, IDENTITIES, paper_words)
     row = rows[0]
     relative = float(row["max_error"]) / max(float(row["scale"]), 1e-300)
     comparison = within(identity, relative, 0.0, ROUNDING)
     grade = grade_share([comparison], EVERY, f"The two sides differ by {relative:.1e} (relative).")
     return Claim(section, figure, title, rule, f"{row['cases']} cases, largest relative difference {relative:.1e}"
-                 + (f"; {row['detail']}" if row.get("detail") else "") + ".", same(grade), paper_words, TEXT)
+                 + (f"; {row['detail']}" if row.get("detail") else "") + ".", same(grade), paper_words, WORDS)
 
 
 def triangle_covariance_as_cgal(data):
     """§III: the triangle covariance "is consistent with the standard formulation in CGAL" (whose triangle moment
     matrix "should be a 5x multiple of the one for 3D tetrahedrons")."""
-    return _identity(data, "§III", "The triangle covariance is CGAL's (a 5× multiple of the tetrahedron's moment "
-                     "matrix)", "cgal_triangle_moment", "consistent with CGAL", "Fig 1")
+    return _identity(data, "§III", "The triangle covariance is CGAL's (5× the tetrahedron's moment matrix)",
+                     "cgal_triangle_moment", "consistent with CGAL", "Fig 1")
 
 
 def mean_update_as_approximation(data):
@@ -119,8 +119,8 @@ def hierarchical_update(data):
 def equivalent_to_traditional_em(data):
     """§VII: "We demonstrate theoretical and empirical equivalence with traditional techniques" (points as
     primitives of no extent and unit size give traditional EM)."""
-    return _identity(data, "§VII", "On points the method is traditional EM (scikit-learn's GaussianMixture, step for "
-                     "step)", "points_equal_sklearn", "equivalence")
+    return _identity(data, "§VII", "On points the method is traditional EM (scikit-learn's, step for step)",
+                     "points_equal_sklearn", "equivalence")
 
 
 CLAIMS = (invariant_to_resampling, triangle_covariance_as_cgal, mean_update_as_approximation, triangle_equals_points,
