@@ -15,6 +15,7 @@ from pathlib import Path
 
 from dgmm.data import load_mesh, load_points
 from dgmm.experiments.report import claims, figures, layout, paper, tables
+from dgmm.experiments.report.claims.rules import SECTION_TITLES, first_section
 from dgmm.experiments.report.document import markdown_table, to_html, to_markdown
 from dgmm.files import atomic_path
 from dgmm.runtime.tables import read_csv, write_csv
@@ -139,21 +140,18 @@ FIGURES = (
                f"(the uniform distribution over the triangle, eq. 9) drawn at {figures.N_SIGMA}σ."),
     FigureSpec("fig2", "Fig 2: likelihood expressions agree", ("fig2",), (),
                lambda data: figures.fig2_expressions(data.fig2),
-               "One GMM fitted to dense random samples of bunny res4, scored by each expression. **Bars**: the "
-               "paper's plotted quantity, Σᵢ ηᵢₚ log ρᵢₚ per unit size (the bound without the entropy of the "
-               "responsibilities); orange bars are the mesh expressions (triangle = exact, eq. 11), blue bars n "
-               "sampled points (±1 std over draws). **Black diamonds**: our EM bound, which adds the entropy and "
-               "equals the mean log-likelihood for points. **Red lines**: all the fitted points (solid: the "
-               "paper's quantity, dashed: the mean log-likelihood). The y axis does not start at zero."),
+               "One GMM fitted to dense samples of bunny res4, scored by each expression. **Bars**: the paper's "
+               "quantity Σᵢ ηᵢₚ log ρᵢₚ per unit size; orange the mesh expressions (triangle: eq. 11), blue n sampled "
+               "points (±1 std over draws). **Diamonds**: our EM bound (with the entropy). **Red lines**: all the "
+               "fitted points (solid: the paper's quantity, dashed: mean log-likelihood). The y axis does not start "
+               "at zero."),
     FigureSpec("fig3", "Fig 3: mesh information (bunny res4)", ("likelihood",), claims.FIG3_INPUTS,
                lambda data: figures.likelihood_vs_k(tables.likelihood_curves(data.means, "bunny", claims.FIG3_INPUTS),
                                                     claims.FIG3_INPUTS, paper.FIG3_EXACT_KMEANS),
-               "Mean log-likelihood of res4's evaluation points vs K, one panel per initialisation, band ±1 std "
-               "over seeds. Mesh inputs (exact triangles, area × centroid) are dashed for textbook EM and dotted "
-               "for the authors' published EM (its E-step scales each triangle's Mahalanobis term by its area); "
-               "point inputs (centroids, vertices) are solid. Stars: the paper's exact k-means values. The y axis "
-               f"spans {figures.Y_SPAN:g} nats below the best mean: lines leaving it at the bottom are fits that "
-               "collapsed (453 vertices cannot support hundreds of components)."),
+               "Mean log-likelihood of res4's evaluation points vs K, a panel per start, band ±1 std over seeds. "
+               "Mesh inputs dashed (textbook EM) or dotted (the authors' EM), point inputs solid; stars: the "
+               f"notebook's exact k-means values. The y axis spans {figures.Y_SPAN:g} nats below the best mean: "
+               "lines leaving it are collapsed fits (453 vertices cannot hold hundreds of components)."),
     FigureSpec("fig4", "Fig 4: decimation and sampling (full bunny)", ("likelihood",), claims.FIG4_INPUTS,
                lambda data: figures.likelihood_vs_k(tables.likelihood_curves(data.means, "bunny", claims.FIG4_INPUTS),
                                                     claims.FIG4_INPUTS),
@@ -173,14 +171,9 @@ FIGURES = (
                                    ("fig5_authors", "authors", "the authors' EM"))),
     FigureSpec("fig6", "Fig 6: visual odometry", ("fig6",), (),
                lambda data: Path(data.paths["fig6"]).read_bytes(),
-               "Top-down trajectories of frame-to-frame odometry (drawn by the odometry stage): GMM D2D with pixel "
-               "primitives, GMM D2D with plain points, and point-to-point ICP, against the ground truth. Its ATE "
-               "numbers are in the claims above. Each GMM run's per-frame schedule is the `schedule` column of "
-               "odometry.csv (config `odometry.schedule`): `overlap`, the sweep's, chosen by measurement (k-means++ "
-               "seeds from 1,024 pixels, 3 Lloyd and 2 EM iterations, Gauss-Newton D2D on what each frame sees and "
-               "measures of the other), `fast` (the same mixtures, D2D of the whole mixtures), `common-view` (both "
-               "frames refitted on their common view) or `reference` (k-means + 25 EM iterations, the paper's BFGS; "
-               "the paper does not state its odometry's)."),
+               "Top-down trajectories of frame-to-frame odometry: GMM D2D with pixel primitives, with plain points, "
+               "and point-to-point ICP, against the ground truth. The GMM runs' per-frame schedule is "
+               "odometry.csv's `schedule` (config `odometry.schedule`; docs: the odometry user guide)."),
     FigureSpec("fig7", "Fig 7: input and output representations", figures.MESH_KEYS, (),
                lambda data: figures.fig7_representations(data.meshes, figures.pictured_mixtures(data.meshes,
                                                                                                  data.seed)),
@@ -221,15 +214,10 @@ def _table1_cells(row):
             + [tables.format_number(row[c], 0) for c in tables.TABLE1_C2F_COLUMNS])
 
 
-TABLE1_TEXT = ("As the authors' code ran it: the bunny is Stanford's res4 (948 faces; its likelihoods are Fig 3's "
-               "K=100 fits scored on res4's evaluation set, its registration errors Fig 5's trials), every other "
-               "model a quadric decimation of its full mesh to 1000 faces; K=100, k-means; likelihood of the points "
-               "GMM (vertices) and the mesh GMM (triangles); registration errors as % of ICP's mean error, the mesh "
-               "GMM's with the paper's P2D (one BFGS from the identity) and, in the last two columns, with the "
-               "coarse-to-fine P2D (dgmm.registration.coarse_to_fine: the same mixture, its covariances widened and "
-               "narrowed stage by stage; not in the paper). – : not measured yet. One table per EM variant of the mesh "
-               "GMMs (points GMMs: textbook EM, the same algorithm), under the trials the claims grade; table1.md "
-               "has the authors' literal protocol too.")
+TABLE1_TEXT = ("As the authors' code ran it: the bunny is res4 (Fig 3's K=100 fits, Fig 5's trials), every other model "
+               "a quadric decimation to 1000 faces; K=100, k-means; likelihoods of the points GMM (vertices) and the "
+               "mesh GMM (triangles); registration errors in % of ICP's mean, with the paper's P2D and, last, the "
+               "coarse-to-fine P2D (ours, not in the paper). –: not measured. table1.md has the literal protocol too.")
 TABLE1_SETTINGS = {"scaled": "Trials with translations and the mixtures' covariance floor scaled by the diagonal",
                    "literal": "Trials with the authors' literal ±0.05 translations and reg_covar in model units "
                               "(bunny row: –)"}
@@ -270,15 +258,13 @@ def blocks(loaded, drawn, evaluated):
     result = [("h1", TITLE), *(("p", text) for text in layout.findings(evaluated)),
               ("table", layout.SUMMARY_HEADER, layout.summary_rows(evaluated), "summary"),
               ("h2", "How the claims are graded", "grading"), ("list", layout.grading_rules())]
-    by_section = {}
+    by_section = {}  # the claims come in the paper's order (claims.evaluate)
     for index, claim in enumerate(evaluated):
-        by_section.setdefault(layout.first_section(claim), []).append((index, claim))
-    order = list(layout.SECTION_TITLES)
+        by_section.setdefault(first_section(claim), []).append((index, claim))
     specs = {spec.name: spec for spec in FIGURES}
     placed = []
-    for section in sorted(by_section, key=lambda name: order.index(name) if name in order else len(order)):
-        listed = by_section[section]
-        result.append(("h2", layout.SECTION_TITLES.get(section, section), layout.section_anchor(section)))
+    for section, listed in by_section.items():
+        result.append(("h2", SECTION_TITLES.get(section, section), layout.section_anchor(section)))
         result.append(("list", [layout.claim_item(claim) for _, claim in listed],
                        [layout.claim_anchor(index) for index, _ in listed]))
         for name in dict.fromkeys(name for _, claim in listed for name in _shown_with(claim.figure)):

@@ -8,35 +8,14 @@ import re
 
 from dgmm.experiments.report import claims
 from dgmm.experiments.report.claims import grading
-from dgmm.experiments.report.claims.rules import NOTEBOOK, TEXT
+from dgmm.experiments.report.claims.rules import NOTEBOOK, SECTION_TITLES, TEXT, WORDS, first_section
 from dgmm.experiments.report.document import BADGE_MARKS
 
-SECTION_TITLES = {
-    "§I": "I. Introduction",
-    "§II": "II. Method",
-    "§III": "III. Modifying EM to account for triangles",
-    "§III-A": "III-A. Evaluating the derived loss function",
-    "§IV": "IV. Results",
-    "§IV-A": "IV-A. Mesh input data",
-    "§IV-B": "IV-B. Mesh decimation",
-    "§IV-C": "IV-C. Discussion",
-    "§V-A": "V-A. Generalization to other primitives",
-    "§VI-A": "VI-A. Mesh registration",
-    "§VI-B": "VI-B. Analysis of mesh registration",
-    "§VI-C": "VI-C. Other 3D models",
-    "§VI-D": "VI-D. Visual odometry",
-    "§VII": "VII. Conclusion",
-}
-"""The paper's sections that make claims, in the paper's order."""
+
 VERDICT_ORDER = (grading.REPRODUCED, grading.PARTLY, grading.NOT, grading.TIMING_NOISE, grading.PENDING)
-SOURCE_MARKS = {NOTEBOOK: "ᴺ", TEXT: "", claims.rules.WORDS: ""}
+SOURCE_MARKS = {NOTEBOOK: "ᴺ", TEXT: "", WORDS: ""}
 """Mark of a paper value by where it comes from (:data:`~.claims.rules.NOTEBOOK`: not in the paper's text)."""
 TIMING_START, TIMING_END = "<!-- timings: the only part that changes from run to run -->", "<!-- /timings -->"
-
-
-def first_section(claim):
-    """The section a claim is listed under: the first it names ("§I, §VII" → "§I")."""
-    return claim.section.split(",")[0].strip()
 
 
 def claim_anchor(index):
@@ -64,12 +43,13 @@ SUMMARY_HEADER = ["section", "claim — why, when not reproduced",
 
 
 def summary_rows(evaluated):
-    """One row per claim: its section (linked to its place in the report), its title linked to its details with
-    the cause when not reproduced, each EM's verdict and deciding number, the paper's value (marked by source)."""
-    return [[f"[{claim.section}](#{section_anchor(first_section(claim))})",
+    """One row per claim: its section, its title linked to its place in its section's list with
+    the cause when not reproduced, each EM's verdict and deciding number, the paper's value (marked by source; none
+    where the paper's value is its words, which the title gives)."""
+    return [[claim.section,
              f"[{claim.title}](#{claim_anchor(index)})" + (f"\n{claim.why}" if claim.why else ""),
              *(_grade_text(claim.grades[v]) for v in claims.VARIANTS),
-             (claim.paper or "–") + SOURCE_MARKS.get(claim.source, "")]
+             claim.paper + SOURCE_MARKS[claim.source] if claim.source != WORDS and claim.paper else ""]
             for index, claim in enumerate(evaluated)]
 
 
@@ -79,46 +59,46 @@ def _counts(evaluated, variant):
 
 
 def findings(evaluated):
-    """The prose at the top: the counts of each EM, then per section what does not reproduce (the headline EM's
-    verdict), then the claims on which the two EMs disagree."""
+    """The prose at the top: the counts of each EM, what the headline EM reproduces by the paper's sections, and
+    how often the two EMs disagree."""
     headline, other = claims.HEADLINE, next(v for v in claims.VARIANTS if v != claims.HEADLINE)
-    paragraphs = [
+    by_section = {}
+    for claim in evaluated:
+        by_section.setdefault(first_section(claim), []).append(claim)
+    sections = "; ".join(f"{section} {sum(c.verdict == grading.REPRODUCED for c in listed)}/{len(listed)}"
+                         for section, listed in by_section.items())
+    split = sum(claim.grades[headline].verdict != claim.grades[other].verdict for claim in evaluated)
+    return [
         f"We graded {len(evaluated)} claims of the paper on our sweep, each on the mixtures of both EMs. With the "
         f"{claims.VARIANT_NAMES[headline]} (the code that produced the paper's numbers, the headline): "
         f"{_counts(evaluated, headline)}. With {claims.VARIANT_NAMES[other]} (the paper's equations 11–13): "
-        f"{_counts(evaluated, other)}. Claims that fit no mixture to a mesh get one verdict in both."]
-    by_section = {}
-    for index, claim in enumerate(evaluated):
-        by_section.setdefault(first_section(claim), []).append((index, claim))
-    lines = [f"{SECTION_TITLES.get(section, section)} {sum(c.verdict == grading.REPRODUCED for _, c in listed)} "
-             f"of {len(listed)}" for section, listed in by_section.items()]
-    paragraphs.append("Reproduced with the headline EM, by the paper's sections: " + "; ".join(lines) + ". Every "
-                      "comparison behind each verdict is in the evidence ledger, claims.md.")
-    split = [f"[{claim.title}](#{claim_anchor(index)})" for index, claim in enumerate(evaluated)
-             if claim.grades[headline].verdict != claim.grades[other].verdict]
-    if split:
-        paragraphs.append(f"The two EMs disagree on {len(split)} claims: " + "; ".join(split) + ". Where the "
-                          "headline reproduces and textbook EM does not, the switch between them (the authors' "
-                          "E-step scales each triangle's terms by its area) is the measured cause.")
-    return paragraphs
+        f"{_counts(evaluated, other)}. Claims that fit no mixture to a mesh get one verdict in both; the two EMs "
+        f"disagree on {split}, and where the headline reproduces and textbook EM does not, the switch between them "
+        "(the authors' E-step scales each triangle's terms by its area) is the measured cause.",
+        f"Reproduced with the headline EM, by the paper's sections: {sections}. Each section below lists its claims "
+        "(marks: the authors' EM's verdict, then textbook EM's) beside its figures; every claim's numbers and rule "
+        "are in the evidence ledger, claims.md.",
+    ]
 
 
 def grading_rules():
     """The rule kinds, verdicts and value sources, defined once for every claim."""
     kinds = [f"**{kind}**: {text}." for kind, text in grading.RULE_KINDS.items()]
     return kinds + [
-        f"**Verdicts**: {', '.join(VERDICT_ORDER)} (pending: a table the claim needs is missing). A claim not "
-        "reproduced names its measured cause: an experiment that switches the suspected cause and moves the "
-        "verdict, or \"cause not found\" and what was tried.",
-        f"**Paper values**: from the paper's text unless marked {SOURCE_MARKS[NOTEBOOK]}: taken from "
-        f"{NOTEBOOK}.",
+        f"**verdicts**: {', '.join(VERDICT_ORDER)} (a table the claim needs is missing). Not reproduced names its "
+        "measured cause (an experiment that switches it and moves the verdict) or \"cause not found\" and what was "
+        "tried.",
+        f"**paper values**: the paper's text, or {SOURCE_MARKS[NOTEBOOK]} the authors' notebooks (not in the text; "
+        "the figure is an image).",
     ]
 
 
 def claim_item(claim):
-    """A claim as its section lists it: both EMs' verdict marks, the claim, its rule in one line."""
+    """A claim as its section lists it: both EMs' verdict marks (authors' first) and the claim; a timing claim
+    points to the timing block, every claim to its line in the evidence ledger."""
     marks = "".join(BADGE_MARKS[claim.grades[v].verdict] for v in claims.VARIANTS)
-    return f"{marks} **{claim.title}** ({claim.section}): {claim.rule}."
+    timing = " ([timings](#timings))" if claim.timings else ""
+    return f"{marks} {claim.title}{timing}"
 
 
 def ledger_item(claim):
@@ -142,8 +122,8 @@ def ledger(evaluated):
 def timing_block(evaluated):
     """The run's timing numbers, one line per timing claim, between markers that :func:`without_timings`
     finds."""
-    lines = [f"[{claim.title}](#{claim_anchor(index)}): {claim.timings}." for index, claim in enumerate(evaluated)
-             if claim.timings]
+    lines = [f"[claim {index + 1}](#{claim_anchor(index)}), {claim.section}: {claim.timings}."
+             for index, claim in enumerate(evaluated) if claim.timings]
     return [("p", TIMING_START), ("list", lines or ["no timing claim has its data yet"]), ("p", TIMING_END)]
 
 

@@ -10,15 +10,17 @@ from dgmm.experiments.report.claims import convergence, decimation, fitting, odo
 from dgmm.experiments.report.claims.grading import (NOT, PARTLY, PENDING, REPRODUCED, RULE_KINDS, TIMING_NOISE,
                                                     VERDICTS, Grade)
 from dgmm.experiments.report.claims.measurements import TABLES, Measurements
-from dgmm.experiments.report.claims.rules import FIG3_INPUTS, FIG4_INPUTS, HEADLINE, VARIANT_NAMES, VARIANTS, Claim
+from dgmm.experiments.report.claims.rules import (FIG3_INPUTS, FIG4_INPUTS, HEADLINE, VARIANT_NAMES, VARIANTS, Claim,
+                                                  in_paper_order)
 
 SECTIONS = (theory, fitting, decimation, convergence, registration, table1, odometry)
 CLAIMS = tuple(claim for module in SECTIONS for claim in module.CLAIMS)
 
 
 def evaluate(data):
-    """Every claim of ``CLAIMS`` graded on ``data`` (a :class:`Measurements`), in the paper's order."""
-    return [claim(data) for claim in CLAIMS]
+    """Every claim of ``CLAIMS`` graded on ``data`` (a :class:`Measurements`), in the order of the paper's
+    sections."""
+    return in_paper_order([claim(data) for claim in CLAIMS])
 
 
 __all__ = ["CLAIMS", "Claim", "FIG3_INPUTS", "FIG4_INPUTS", "Grade", "HEADLINE", "Measurements", "NOT", "PARTLY",

@@ -200,14 +200,12 @@ class Quantifier:
         return PARTLY if tally.beyond_chance() or (wins and not losses) else NOT
 
 
-PARTLY_RULE = "partly when the wins are beyond chance (sign test) or none of the untied comparisons is lost"
-EVERY = Quantifier("every", "every, all, always, never", f"reproduced when every comparison is won (a tie does not "
-                   f"show the claim); {PARTLY_RULE}; else not reproduced")
-PLAIN = Quantifier("plain", "a plain comparative, usually, largely", f"reproduced when at least {PLAIN_SHARE:.0%} of "
-                   "the untied comparisons are won and they are no fewer than the ties; "
-                   f"{PARTLY_RULE}; else not reproduced")
-OFTEN_WORDS = Quantifier("often", "often", f"reproduced when at least {OFTEN:.0%} of all comparisons are won, partly "
-                         f"at {SOMETIMES:.0%}; else not reproduced")
+PARTLY_RULE = "partly when the wins are beyond chance (sign test) or no untied comparison is lost"
+EVERY = Quantifier("every", "every, all, always, never", "reproduced when every comparison is won")
+PLAIN = Quantifier("plain", "a plain comparative, usually, largely", f"reproduced when ≥ {PLAIN_SHARE:.0%} of the "
+                   "untied comparisons are won and they are no fewer than the ties")
+OFTEN_WORDS = Quantifier("often", "often", f"reproduced when ≥ {OFTEN:.0%} of all comparisons are won, partly at "
+                         f"≥ {SOMETIMES:.0%}")
 QUANTIFIERS = (EVERY, PLAIN, OFTEN_WORDS)
 
 
@@ -300,18 +298,16 @@ def grade_time(ratio, cause=""):
 
 
 RULE_KINDS = {
-    "comparison": f"one number of ours against another in the direction the claim states; a tie when the difference "
-                  f"is within the tie band, {BAND_ERRORS:g} standard errors of the difference from the measured "
-                  "noise (seed-to-seed spread of the sweep's fits; a paired bootstrap over the registration trials); "
-                  "a tie counts neither way",
-    "share": "a claim's comparisons counted under the paper's quantifier: " + "; ".join(
-        f"*{q.name}* ({q.words}): {q.rule}" for q in QUANTIFIERS)
-    + f". The sign test is one-sided at {ALPHA:.0%} over the untied comparisons",
-    "equivalence": "a number within a stated margin of a target (the paper's value, zero, rounding): a comparison "
-                   "won inside the margin and lost outside it, counted as a share",
-    "time ratio": f"CPU-time ratios of interleaved repeats in one job; the median's {1 - ALPHA:.0%} interval from "
-                  "order statistics must clear the claim's threshold: inside reproduced, outside not reproduced, "
-                  f"across it *{TIMING_NOISE}* (no verdict: a rerun could flip it). The numbers are in the timing "
-                  "block, the only part of the report that changes from run to run",
+    "comparison": f"ours against another number in the claim's direction, tied within {BAND_ERRORS:g} standard errors "
+                  "of the difference (the seeds' spread of the sweep's fits; a paired bootstrap over registration "
+                  "trials); a tie counts neither way",
+    "share": "the comparisons counted by the paper's quantifier: " + "; ".join(
+        f"*{q.name}* ({q.words}) {q.rule}" for q in QUANTIFIERS)
+    + f"; for *every* and *plain*, {PARTLY_RULE} (one-sided, {ALPHA:.0%}, over the untied comparisons)",
+    "equivalence": "a number within a stated margin of a target (the paper's value, zero, rounding), counted as a "
+                   "share",
+    "time ratio": f"CPU-time ratios of interleaved repeats; the median's {1 - ALPHA:.0%} interval (order statistics) "
+                  f"inside the claim's range: reproduced, outside: not, across its edge: *{TIMING_NOISE}*, no verdict "
+                  "(a rerun could flip it); the numbers are only in the timing block",
 }
 """The four rule kinds, as the report defines them once."""

@@ -218,8 +218,8 @@ def fig5_means_match(data):
                             _table(errors, np.mean) + unwon(comparisons.values()))
 
     grades, lines = per_variant(grade)
-    return Claim(*args, rule, f"mean rotation / translation errors, {' — '.join(lines)}.", grades, published,
-                 NOTEBOOK)
+    return Claim(*args, rule, f"paper: {published}; ours, mean rotation / translation errors, {' — '.join(lines)}.",
+                 grades, "Fig 5's means", NOTEBOOK)
 
 
 TRANSLATION_LIMIT = 1.1

@@ -45,6 +45,37 @@ SIMILAR_TIME = (0.78, 1.28)
 the upper end is "much faster"."""
 
 
+SECTION_TITLES = {
+    "§I": "I. Introduction",
+    "§II": "II. Method",
+    "§III": "III. Modifying EM to account for triangles",
+    "§III-A": "III-A. Evaluating the derived loss function",
+    "§IV": "IV. Results",
+    "§IV-A": "IV-A. Mesh input data",
+    "§IV-B": "IV-B. Mesh decimation",
+    "§IV-C": "IV-C. Discussion",
+    "§V-A": "V-A. Generalization to other primitives",
+    "§VI-A": "VI-A. Mesh registration",
+    "§VI-B": "VI-B. Analysis of mesh registration",
+    "§VI-C": "VI-C. Other 3D models",
+    "§VI-D": "VI-D. Visual odometry",
+    "§VII": "VII. Conclusion",
+}
+"""The paper's sections that make claims, in the paper's order."""
+
+
+def first_section(claim):
+    """The section a claim is listed under: the first it names ("§I, §VII" → "§I")."""
+    return claim.section.split(",")[0].strip()
+
+
+def in_paper_order(evaluated):
+    """Claims sorted by the paper's section that makes them (stable within a section)."""
+    order = list(SECTION_TITLES)
+    return sorted(evaluated, key=lambda claim: order.index(first_section(claim)) if first_section(claim) in order
+                  else len(order))
+
+
 TEXT = "the paper's text"
 NOTEBOOK = "the authors' notebooks (not in the paper's text; its figure is an image)"
 WORDS = "the paper's words"
