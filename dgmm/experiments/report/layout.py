@@ -55,7 +55,7 @@ def summary_rows(evaluated):
 
 def _counts(evaluated, variant):
     verdicts = [claim.grades[variant].verdict for claim in evaluated]
-    return ", ".join(f"{verdicts.count(v)} {v}" for v in VERDICT_ORDER if v in verdicts)
+    return ", ".join(f"{{{{{v}}}}} {verdicts.count(v)}" for v in VERDICT_ORDER if v in verdicts)
 
 
 def findings(evaluated):
