@@ -6,7 +6,7 @@ rotation vector in camera ``k``) and ``δ = t - t*``.
 
 *Growth*: the RMS error of ``W`` consecutive motions composed, against the truth's composed, over every start: noise
 of each registration's own grows as ``√W``, a bias as ``W``; the ground truth's own pose noise enters once per window
-whatever ``W`` (it is what most of the one-frame rotation error is: its lag-1 autocorrelation is near -0.5 there).
+whatever ``W`` (alone, differenced into motions, it gives a lag-1 autocorrelation of -0.5: printed per coordinate).
 
 *Bias models*: each of the six error coordinates is regressed by least squares on features of the frame, the sums over
 blocks of ``--block`` frames fitted (a window's ground-truth noise is that of one frame, its motion ``--block`` times
@@ -121,7 +121,7 @@ def main():
     parser.add_argument("--block", type=int, default=10)
     args = parser.parse_args()
     sequence = read_sequence(args.sequence)
-    features_cache, growth_rows, lag_rows = None, [], []
+    features_cache, growth_rows, lag_rows, scales = None, [], [], []
     print("| run | model | parameters | explained, out of fold (rotation, translation) | ATE bias only (m) | "
           "ATE left (m) |")
     print("|---|---|---|---|---|---|")
@@ -157,7 +157,8 @@ def main():
         print(f"| {name} | none (the run) | 0 | – | – | {ate(error):.4f} |")
         for model, (features, count) in models.items():
             if features is None:
-                predicted = shared_scale(error, motion, args.block)
+                predicted, factors = shared_scale(error, motion, args.block)
+                scales.append((name, factors))
             else:
                 predicted = two_halves(features, error, args.block)
             explained = block_explained(error, predicted, args.block)
@@ -173,6 +174,11 @@ def main():
     for name, values in growth_rows:
         print(f"| {name} | " + " | ".join(f"{r:.3f}, {t:.2f}" for r, t in values) + " |")
     print()
+    print("| run | measured / true: rotation, translation fitted on the second half; the same fitted on the first |")
+    print("|---|---|")
+    for name, factors in scales:
+        print(f"| {name} | {factors[0]:.3f}, {factors[1]:.3f}; {factors[2]:.3f}, {factors[3]:.3f} |")
+    print()
     print("| run | one frame's error RMS (°, mm) | its lag-1 autocorrelation (ωx, ωy, ωz, δx, δy, δz) |")
     print("|---|---|---|")
     for name, lag, r, t in lag_rows:
@@ -181,10 +187,11 @@ def main():
 
 def shared_scale(error, motion, block):
     """Out-of-fold predictions of one factor on the true rotation (all three coordinates) and one on the true
-    translation, fitted on the blocks' sums of each half."""
+    translation, fitted on the blocks' sums of each half; and the measured / true factors of each half's fit
+    (rotation, translation fitted on the second half, then on the first)."""
     n = len(error)
     halves = np.arange(n) >= n // 2
-    predicted = np.zeros_like(error)
+    predicted, factors = np.zeros_like(error), []
     for half in (False, True):
         train = np.flatnonzero(halves != half)
         train = train[:len(train) // block * block]
@@ -192,7 +199,8 @@ def shared_scale(error, motion, block):
             x = motion[train, part].reshape(-1, block, 3).sum(axis=1).ravel()
             y = error[train, part].reshape(-1, block, 3).sum(axis=1).ravel()
             predicted[halves == half, part] = motion[halves == half, part] * (x @ y / (x @ x))
-    return predicted
+            factors.append(1 + x @ y / (x @ x))
+    return predicted, factors
 
 
 if __name__ == "__main__":
