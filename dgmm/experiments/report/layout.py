@@ -106,8 +106,8 @@ def ledger_item(claim):
     grades = "; ".join(f"{claims.VARIANT_NAMES[v]} {_grade_text(claim.grades[v])}" for v in claims.VARIANTS)
     evidence = claim.evidence or "its numbers are in the report's timing block."
     source = "" if claim.source != NOTEBOOK else " (authors' notebooks)"
-    return (f"**{claim.title}** ({claim.section}) — {grades}. Paper: {claim.paper or '–'}{source}. "
-            f"Ours: {evidence} Rule: {claim.rule}.").replace("..", ".")
+    return re.sub(r"\.\.(?= |$)", ".", f"**{claim.title}** ({claim.section}) — {grades}. "
+                  f"Paper: {claim.paper or '–'}{source}. Ours: {evidence} Rule: {claim.rule}.")
 
 
 def ledger(evaluated):

@@ -2,15 +2,16 @@
 
 The paper ran TUM fr3/long_office_household (2510 frames); our sequences (fr1/xyz and a synthetic one, unless the
 fr3 folder is present) stand in for it: the claims are graded on what they show and say so. An ATE comparison's
-tie band is the seed-to-seed spread of the runs (odometry.csv's ``seed`` column); with one seed per run no spread is
-measured and the band is 0, which the evidence says.
+tie band is the seed-to-seed spread of the runs (odometry.csv's ``seed`` column); the sweep runs one seed (a fr1/xyz
+run takes about 90 s of a core), and then the spread measured over seeds in a study, :data:`ATE_SEED_SPREAD`, gives
+each run's standard error.
 """
 from collections import defaultdict
 
 import numpy as np
 
 from dgmm.experiments.report import paper
-from dgmm.experiments.report.claims.grading import PLAIN, compare, estimate, grade_share, versus_paper
+from dgmm.experiments.report.claims.grading import PLAIN, Estimate, compare, estimate, grade_share, versus_paper
 from dgmm.experiments.report.claims.rules import (SIMILAR_TIME, TEXT, VARIANT_NAMES, WORDS, Cause, Claim, beside,
                                                   graded_share, missing, pending, per_variant, timing_claim)
 from dgmm.odometry.frame_model import UNSIZED_METHODS
@@ -20,6 +21,10 @@ WHAT = "odometry.csv (config section `odometry`)"
 STAND_INS = "our sequences stand in for the paper's fr3/long_office_household"
 PAPER_DECIMALS = 3
 """The paper prints its ATEs to the millimetre (0.878 m, 0.899 m)."""
+ATE_SEED_SPREAD = 0.114
+"""Standard deviation of one run's ATE RMSE over seeds, as a fraction of the mean: fr1/xyz, gmm-pixels, `overlap`,
+seeds 0-4 of each EM, pooled (textbook 0.0373-0.0439 m, the authors' 0.0322-0.0467; the study's table and command in
+docs/studies/odometry_drift.md, which a test reads back)."""
 
 
 def _ates(rows, variant):
@@ -30,15 +35,31 @@ def _ates(rows, variant):
         serves = ("", variant, "textbook") if row.get("method") in UNSIZED_METHODS else ("", variant)
         if row.get("method") and row.get("variant", "") in serves and row.get("ate_rmse_m", "") != "":
             runs[row["sequence"]][row["method"]].append(float(row["ate_rmse_m"]))
-    return {sequence: {method: estimate(values) for method, values in methods.items()}
+    return {sequence: {method: _estimate(values) for method, values in methods.items()}
             for sequence, methods in runs.items()}
+
+
+def _estimate(values):
+    """Mean ATE of a run's seeds with its standard error; one seed's error from :data:`ATE_SEED_SPREAD`."""
+    return estimate(values) if len(values) > 1 else Estimate(values[0], ATE_SEED_SPREAD * values[0])
+
+
+def _seeded(rows):
+    """Whether odometry.csv holds more than one seed of a run."""
+    return len({row["seed"] for row in rows or [] if row.get("seed", "") != ""}) > 1
+
+
+def _spread(rows):
+    """What a run's standard error is, in words."""
+    return (f"a run's error the spread of its {len({row['seed'] for row in rows})} seeds" if _seeded(rows) else
+            f"{ATE_SEED_SPREAD:.1%}, fr1/xyz")
 
 
 def _seeds(rows):
     """What the tie band of an ATE comparison rests on, for the evidence."""
-    seeds = {row["seed"] for row in rows or [] if row.get("seed", "") != ""}
-    return (f"band: 2 standard errors over {len(seeds)} seeds" if len(seeds) > 1 else
-            "one seed per run: no seed spread was measured, band 0")
+    return (f"band: 2 standard errors over {len({row['seed'] for row in rows})} seeds" if _seeded(rows) else
+            f"one seed per run, band: 2 standard errors, a run's error {ATE_SEED_SPREAD:.1%} of its ATE (the seed "
+            "spread measured on fr1/xyz, docs/studies/odometry_drift.md)")
 
 
 def _schedule(rows):
@@ -57,21 +78,32 @@ def _span(gaps):
     return " to ".join(dict.fromkeys(f"{gap:.2g}" for gap in (min(gaps), max(gaps)))) + " m"
 
 
-def _pixel_cause(rows):
-    """Cause of pixel-primitive ATEs not below the plain points': how far the two EMs' pixel runs of a sequence lie
-    apart (the fits' own variation) against how far pixels and points do."""
+def _pixel_cause(rows, comparisons, variant):
+    """Cause of pixel-primitive ATEs not below the plain points': the paper's effect (2.4%) against a run's seed
+    spread; a loss under textbook EM alone, its area weights; the two EMs' pixel runs' distance against pixels' and
+    points', for the evidence."""
+    improvement = paper.FIG6_ATE_M["gmm-points"] / paper.FIG6_ATE_M["gmm-pixels"] - 1
+    lost = [c.label for c in comparisons if c.outcome == "lost"]
     runs = {variant: _ates(rows, variant) for variant in VARIANT_NAMES}
     sequences = [s for s in runs["textbook"]
                  if all({"gmm-pixels", "gmm-points"} <= runs[v].get(s, {}).keys() for v in runs)]
-    if not sequences:
-        return Cause(f"Cause not found ({_seeds(rows)}).")
     between = [abs((runs["authors"][s]["gmm-pixels"] - runs["textbook"][s]["gmm-pixels"]).value) for s in sequences]
     effect = [abs((r[s]["gmm-pixels"] - r[s]["gmm-points"]).value) for r in runs.values() for s in sequences]
-    overlap = min(between) <= max(effect)
-    return Cause("Cause not found: the two EMs' pixel runs lie as far apart as pixels and points." if overlap else
-                 f"Cause not found ({_seeds(rows)}).",
-                 f"not found ({_seeds(rows)}): the two EMs' pixel runs lie {_span(between)} apart, pixels and points "
-                 f"{_span(effect)}")
+    detail = (f"the two EMs' pixel runs lie {_span(between)} apart, pixels and points {_span(effect)}"
+              if sequences else "")
+    tied = (f"The paper's {improvement:.1%} is inside a run's seed spread ({_spread(rows)})"
+            if not _seeded(rows) else "The differences are inside the seeds' spread")
+    if lost and variant == "textbook" and not _lost(rows, "authors", lost):
+        return Cause(tied + f"; {', '.join(lost)} lost under textbook EM alone: its area weights (∝ Z²) favour the "
+                     "far surfaces (odometry docs).", detail)
+    return Cause(tied + (f"; {', '.join(lost)} lost: cause not found." if lost else "."), detail)
+
+
+def _lost(rows, variant, sequences):
+    """Whether gmm-pixels' ATE is above gmm-points' beyond the band on any of ``sequences`` under ``variant``."""
+    runs = _ates(rows, variant)
+    return any(compare(s, runs[s]["gmm-pixels"] - runs[s]["gmm-points"], higher=False).outcome == "lost"
+               for s in sequences if {"gmm-pixels", "gmm-points"} <= runs.get(s, {}).keys())
 
 
 def pixels_beat_points(data):
@@ -94,7 +126,7 @@ def pixels_beat_points(data):
                                       f"({r['gmm-points'].value / r['gmm-pixels'].value - 1:+.1%})"
                                       + (f", icp {r['icp']:.3f} m" if "icp" in r else ""))
                        for s, r in runs.items()]
-        return graded_share(comparisons, PLAIN, _pixel_cause(data.odometry),
+        return graded_share(comparisons, PLAIN, _pixel_cause(data.odometry, comparisons, variant),
                             "; ".join(f"{c.label} {c.detail}" for c in comparisons))
 
     grades, lines = per_variant(grade)
