@@ -324,7 +324,7 @@ def read_recording(path, depth_topic, camera_info_topic=None, *, groundtruth=Non
     stamps, first, camera_info = [], None, None
     for file in files:
         for topic, schema, message in _messages(file, [depth_topic, info_topic], validate_crcs=True):
-            if topic == info_topic:
+            if topic == info_topic != depth_topic:
                 if camera_info is None:
                     camera_info = (schema, message, f"{path}: {topic}")
                 continue
