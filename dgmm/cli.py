@@ -420,8 +420,7 @@ def _odometry(args):
         result = run_odometry(sequence, args.method, frames, callback=advance, **options)
         if recorder is not None:
             recorder.finish(result.trajectory)
-        metrics = (drift_metrics(result.trajectory, sequence.groundtruth) if groundtruth is not None else
-                   {"ate_rmse_m": None, "rpe_translation_m_s": None, "rpe_rotation_deg_s": None})
+        metrics = drift_metrics(result.trajectory, sequence.groundtruth)  # all None without ground truth
         if args.output is not None:
             write_trajectory(args.output, result.trajectory,
                              header=f"dgmm {args.method} odometry of {sequence.name}, intrinsics {camera}")

@@ -281,3 +281,41 @@ def test_writer_rejects_depth_it_cannot_store(tmp_path):
     with pytest.raises(InputError, match="encoding"):
         write_recording(tmp_path / "rgb.mcap", [np.ones((2, 2))], [1.0], encoding="rgb8")
     assert list(tmp_path.iterdir()) == []
+
+
+# ------------------------------------------------------------------------------------------------ the sweep
+@pytest.mark.slow
+def test_sweep_runs_recordings_beside_tum_folders(recordings, tmp_path):
+    """`snakemake odometry` with two recordings in odometry.sequences: one with ground truth (scored, in Fig 6
+    against it) and one without camera info or ground truth (its intrinsics configured; a row without metrics, its
+    panel unaligned); the job's trajectory has the command line's timestamps, the header stamps."""
+    from dgmm.runtime.tables import read_csv
+    from tests.test_odometry_workflow import write_config
+    from tests.workflow import run_snakemake
+
+    sequences = [{"path": str(recordings["16UC1"]), "depth_topic": DEPTH,
+                  "groundtruth": str(FR1_XYZ / "groundtruth.txt")},
+                 {"path": str(recordings["no info"]), "depth_topic": DEPTH, "intrinsics": "ros"}]
+    config = write_config(tmp_path, sequences=sequences, methods=["icp"], frames=8)
+    run = run_snakemake(tmp_path / "work", "odometry", configfile=config, timeout=600)
+    assert run.returncode == 0, run.stderr[-3000:]
+    results = tmp_path / "work" / "results"
+    rows = {row["sequence"]: row for row in read_csv(results / "tables" / "odometry.csv")}
+    assert set(rows) == {"fr1_16UC1", "fr1_noinfo"} and rows["fr1_16UC1"]["frames"] == "8"
+    assert 0 < float(rows["fr1_16UC1"]["ate_rmse_m"]) < 0.05 and rows["fr1_noinfo"]["ate_rmse_m"] == ""
+    assert (results / "odometry" / "fig6.png").stat().st_size > 0
+    cli = dgmm_odometry(recordings["16UC1"], "--depth-topic", DEPTH, "--frames", 8, "--method", "icp", "-o",
+                        tmp_path / "t.txt")
+    assert cli.returncode == 0, cli.stderr
+    job = np.loadtxt(results / "odometry" / "fr1_16UC1" / "icp" / "trajectory.txt", comments="#")
+    assert job.shape == (8, 8) and np.array_equal(job[:, 0], np.loadtxt(tmp_path / "t.txt", comments="#")[:, 0])
+
+
+@pytest.mark.slow
+def test_sweep_config_names_a_recording_s_missing_key(tmp_path):
+    from tests.test_odometry_workflow import write_config
+    from tests.workflow import run_snakemake
+
+    config = write_config(tmp_path, sequences=[{"path": "rec.mcap"}])
+    run = run_snakemake(tmp_path / "work", "-n", "odometry", configfile=config, timeout=300)
+    assert run.returncode != 0 and "depth_topic" in run.stdout + run.stderr
