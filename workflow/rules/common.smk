@@ -169,8 +169,11 @@ def odometry_source(entry):
     the source is what ``dgmm.odometry.open_sequence`` reads (``path``, and a recording's topics and ground truth),
     with its ``intrinsics`` when configured. Relative paths are from the repository root."""
     if entry == "synthetic":
-        return "synthetic", {"path": SYNTHETIC_SEQUENCE, "groundtruth": f"{SYNTHETIC_SEQUENCE}/groundtruth.txt",
-                             "intrinsics": "fr3"}
+        return "synthetic", {
+            "path": SYNTHETIC_SEQUENCE,
+            "groundtruth": f"{SYNTHETIC_SEQUENCE}/groundtruth.txt",
+            "intrinsics": "fr3",
+        }
     if isinstance(entry, str):
         entry = {"path": entry}
     source = {**entry, "path": data_dir(entry["path"])}
@@ -219,7 +222,8 @@ def odometry_figure_inputs():
     """What Fig 6 reads besides the trajectories: every sequence (a folder's ground truth is read from it) and
     the recordings' ground-truth files."""
     return [source["path"] for source in ODO_SEQUENCES.values()] + [
-        source["groundtruth"] for source in ODO_SEQUENCES.values() if "depth_topic" in source and source["groundtruth"]]
+        source["groundtruth"] for source in ODO_SEQUENCES.values() if "depth_topic" in source and source["groundtruth"]
+    ]
 
 
 def odometry_run_params(wildcards):
@@ -229,8 +233,13 @@ def odometry_run_params(wildcards):
     method, variant = ODO_RUNS[wildcards.run]
     source = ODO_SEQUENCES[wildcards.sequence]
     camera = source["intrinsics"] or (None if "depth_topic" in source else sequence_intrinsics(wildcards.sequence))
-    return {"method": method, "variant": variant or "textbook", "intrinsics": camera,
-            "depth_topic": source.get("depth_topic"), "camera_info_topic": source.get("camera_info_topic")}
+    return {
+        "method": method,
+        "variant": variant or "textbook",
+        "intrinsics": camera,
+        "depth_topic": source.get("depth_topic"),
+        "camera_info_topic": source.get("camera_info_topic"),
+    }
 
 
 # Checks
