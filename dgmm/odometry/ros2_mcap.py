@@ -99,7 +99,9 @@ def _depth_metres(image, source):
                         f"({image.width} {image.encoding} pixels a row)")
     rows = np.frombuffer(image.data, np.uint8, count=image.step * image.height).reshape(image.height, image.step)
     depth = np.true_divide(rows[:, :row_bytes].view(dtype), units, dtype=np.float64)
-    return np.where(np.isfinite(depth) & (depth > 0), depth, 0.0)
+    if dtype.kind == "f":  # REP 118: NaN and ±Inf, and here anything not in front, are no measurement
+        depth[~(np.isfinite(depth) & (depth > 0))] = 0.0
+    return depth
 
 
 # ------------------------------------------------------------------------------------------------ files
