@@ -233,7 +233,7 @@ class TumSequence:
     depth_timestamps: np.ndarray
     depth_files: tuple
     groundtruth: Trajectory | None
-    groundtruth_file: Path | None = None
+    groundtruth_file: Path | None
 
     camera_frame = "camera"
     """TUM's files name no frame: the depth camera's is ``camera``."""
