@@ -157,7 +157,7 @@ def _messages(file, topics, validate_crcs=False):
         raise DataError(f"{file}: cannot read ({exc.strerror or exc})") from None
     except Exception as exc:  # noqa: BLE001 (see above)
         raise DataError(f"{file}: not a readable MCAP file, truncated or corrupt ({type(exc).__name__}: {exc}); "
-                        "`mcap recover` may save its readable part") from None
+                        "the mcap CLI's `mcap recover` may save its readable part") from None
 
 
 def _topics(files):
