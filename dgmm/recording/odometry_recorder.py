@@ -3,7 +3,6 @@ each frame's depth image and model to rerun."""
 import numpy as np
 import rerun as rr
 
-from dgmm.odometry.pixels import PIXEL_STEP
 from dgmm.recording.blueprints import odometry_blueprint
 from dgmm.recording.ellipsoids import DEFAULT_N_SIGMA
 from dgmm.recording.foxglove_messages import frame_transform, pose_in_frame, poses_in_frame
@@ -68,6 +67,9 @@ class OdometryRecorder(Recording):
 
     def __init__(self, mcap_path, rrd_path=None, *, params=None, groundtruth=None, intrinsics=None,
                  camera_frame="camera", n_sigma=DEFAULT_N_SIGMA):
+        from dgmm.odometry.pixels import PIXEL_STEP  # here: `import dgmm.recording` stays without the odometry
+
+        self._step = PIXEL_STEP
         self.n_sigma = n_sigma
         self.groundtruth = groundtruth
         self.camera_frame = camera_frame
@@ -88,10 +90,11 @@ class OdometryRecorder(Recording):
                     self._rerun.log("world/groundtruth", rr.LineStrips3D([groundtruth.translations],
                                                                          colors=_GROUNDTRUTH_COLOR))
                 if intrinsics is not None:  # the pinhole of the images logged: every PIXEL_STEP-th pixel
+                    step = self._step
                     self._rerun.log("world/camera/image", rr.Pinhole(
-                        focal_length=[intrinsics.fx / PIXEL_STEP, intrinsics.fy / PIXEL_STEP],
-                        principal_point=[intrinsics.cx / PIXEL_STEP, intrinsics.cy / PIXEL_STEP],
-                        resolution=[-(-intrinsics.width // PIXEL_STEP), -(-intrinsics.height // PIXEL_STEP)],
+                        focal_length=[intrinsics.fx / step, intrinsics.fy / step],
+                        principal_point=[intrinsics.cx / step, intrinsics.cy / step],
+                        resolution=[-(-intrinsics.width // step), -(-intrinsics.height // step)],
                         camera_xyz=rr.ViewCoordinates.RDF, image_plane_distance=0.2))
         except BaseException:
             self.abort()
@@ -131,7 +134,7 @@ class OdometryRecorder(Recording):
         self._rerun.set_timestamp(frame.timestamp)
         log = self._rerun.log
         if frame.depth is not None:
-            millimetres = np.rint(1000.0 * frame.depth[::PIXEL_STEP, ::PIXEL_STEP]).clip(0, 65535).astype(np.uint16)
+            millimetres = np.rint(1000.0 * frame.depth[::self._step, ::self._step]).clip(0, 65535).astype(np.uint16)
             log("world/camera/image", rr.DepthImage(millimetres, meter=1000.0), frame.index, "frame")
         log("world/estimated", rr.LineStrips3D([np.array(self._path)], colors=_ESTIMATE_COLOR), frame.index,
             "frame")
