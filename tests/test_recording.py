@@ -296,6 +296,30 @@ def test_ctrl_c_while_a_recorder_opens_leaves_no_files(tmp_path, monkeypatch, re
     assert list(tmp_path.iterdir()) == []
 
 
+def test_ctrl_c_while_rerun_builds_its_stream_is_held_until_the_stream_exists(tmp_path, monkeypatch):
+    """SIGINT in the middle of rerun's RecordingStream constructor: without holding it, the half-built stream's
+    ``__del__`` raises (it assumes the finished object) and Python prints that traceback on stderr."""
+    import gc
+    import os
+    import signal
+
+    import rerun
+
+    real = rerun.RecordingStream.__init__
+
+    def interrupted(self, *args, **kwargs):
+        os.kill(os.getpid(), signal.SIGINT)  # Ctrl-C lands here, before the stream is made
+        real(self, *args, **kwargs)
+
+    monkeypatch.setattr(rerun.RecordingStream, "__init__", interrupted)
+    unraisable = []
+    monkeypatch.setattr(sys, "unraisablehook", unraisable.append)
+    with pytest.raises(KeyboardInterrupt):
+        FitRecorder(tmp_path / "out.mcap", tmp_path / "out.rrd")
+    gc.collect()
+    assert unraisable == [] and list(tmp_path.iterdir()) == []
+
+
 def test_recorder_needs_a_seed(tmp_path):
     with FitRecorder(tmp_path / "fit.mcap") as recorder:
         with pytest.raises(InputError, match="begin_seed"):

@@ -1,6 +1,9 @@
 """A rerun recording (``.rrd``) written atomically, with its blueprint; the mixture's ellipsoids as a rerun
 archetype."""
 import os
+import signal
+import threading
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -17,6 +20,28 @@ def rerun_ellipsoids(means, covariances, n_sigma=DEFAULT_N_SIGMA):
     _, half_sizes, quaternions = covariance_ellipsoids(covariances, n_sigma)
     return rr.Ellipsoids3D(centers=np.asarray(means), half_sizes=half_sizes, quaternions=quaternions,
                            class_ids=np.arange(len(half_sizes)))
+
+
+@contextmanager
+def interrupts_held():
+    """Hold Ctrl-C (SIGINT) until the block ends, then deliver it.
+
+    rerun's ``RecordingStream.__del__`` assumes a finished stream: a KeyboardInterrupt raised while one is being
+    built leaves a half-made object whose collection prints a traceback. Held, the interrupt arrives once the stream
+    exists and the recorder can discard it. Only the main thread receives signals; elsewhere nothing is held.
+    """
+    previous = signal.getsignal(signal.SIGINT)
+    if threading.current_thread() is not threading.main_thread() or previous is None:  # None: not Python's to set
+        yield
+        return
+    received = []
+    signal.signal(signal.SIGINT, lambda signum, frame: received.append(signum))
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+        if received:
+            signal.raise_signal(signal.SIGINT)
 
 
 class RerunRecorder(Output):
@@ -45,11 +70,13 @@ class RerunRecorder(Output):
         self.path = Path(path)
         self.n_sigma = n_sigma
         self._temporary = temporary_path(self.path)
-        self._stream = rr.RecordingStream(application_id, recording_id=recording_id or self.path.stem,
-                                          send_properties=False)
-        self._stream.set_log_time_enabled(False)
-        try:  # an interrupt before __init__ returns would leave the caller nothing to abort
-            self._stream.save(self._temporary, default_blueprint=blueprint or fit_blueprint())
+        self._stream = None
+        try:  # the caller holds nothing to abort until __init__ returns: discard here what was opened
+            with interrupts_held():  # a Ctrl-C arrives once the stream and its file exist
+                self._stream = rr.RecordingStream(application_id, recording_id=recording_id or self.path.stem,
+                                                  send_properties=False)
+                self._stream.set_log_time_enabled(False)
+                self._stream.save(self._temporary, default_blueprint=blueprint or fit_blueprint())
         except BaseException:
             self.abort()
             raise
@@ -123,6 +150,7 @@ class RerunRecorder(Output):
         os.replace(self._temporary, self.path)
 
     def abort(self):
-        """Discard the recording."""
-        self._stream.disconnect()
+        """Discard the recording (its stream may not have been built)."""
+        if self._stream is not None:
+            self._stream.disconnect()
         self._temporary.unlink(missing_ok=True)
