@@ -381,39 +381,37 @@ def _view_arguments(parser):
 # ---------------------------------------------------------------------------------------------------------
 
 def _odometry(args):
-    """Frame-to-frame odometry of a TUM folder: the trajectory file, optional recordings, the metrics as JSON."""
+    """Frame-to-frame odometry of a TUM folder or a ROS 2 recording: the trajectory file, optional recordings, the
+    metrics as JSON."""
     import tempfile
 
-    from dgmm.odometry import first_frames, run_odometry
-    from dgmm.odometry.pixels import parse_intrinsics, sequence_intrinsics
-    from dgmm.recording import OdometryRecorder
+    from dgmm.odometry import first_frames, open_sequence, run_odometry
     from dgmm.odometry.metrics import drift_metrics
-    from dgmm.odometry.tum import read_sequence, write_trajectory
+    from dgmm.odometry.tum import write_trajectory
+    from dgmm.recording import OdometryRecorder
 
-    sequence = read_sequence(args.sequence)
-    name = args.sequence.resolve().name
+    sequence = open_sequence(args.sequence, args.depth_topic, args.camera_info_topic, args.groundtruth)
     try:
-        camera = args.intrinsics or sequence_intrinsics(name)
+        camera, intrinsics = sequence.camera(args.intrinsics)
     except InputError as exc:
         raise InputError(f"{exc} with --intrinsics") from None
     n_frames = len(sequence) if args.frames is None else min(args.frames, len(sequence))
     if n_frames < 2:
-        raise DataError(f"{args.sequence / 'depth.txt'}: odometry needs at least 2 depth frames, got {n_frames}")
-    frames, groundtruth = (first_frames(sequence, n_frames) if sequence.groundtruth is not None
-                           else (range(n_frames), None))
-    options = dict(intrinsics=parse_intrinsics(camera), variant=args.variant, seed=args.seed,
-                   schedule=args.schedule, warm_iter=args.warm_iter or None)
-    params = {"dgmm_version": __version__, "sequence": name, "folder": str(args.sequence), "method": args.method,
-              "frames": n_frames, "intrinsics": camera, "variant": args.variant, "schedule": args.schedule,
-              "warm_iter": args.warm_iter,
-              "seed": args.seed}
+        raise DataError(f"{args.sequence}: odometry needs at least 2 depth frames, got {n_frames}")
+    frames, groundtruth = first_frames(sequence, n_frames, require_groundtruth=False)
+    options = dict(intrinsics=intrinsics, variant=args.variant, seed=args.seed, schedule=args.schedule,
+                   warm_iter=args.warm_iter or None)
+    params = {"dgmm_version": __version__, "sequence": sequence.name, "folder": str(args.sequence),
+              "depth_topic": args.depth_topic, "method": args.method, "frames": n_frames, "intrinsics": camera,
+              "variant": args.variant, "schedule": args.schedule, "warm_iter": args.warm_iter, "seed": args.seed}
     with ExitStack() as stack:
         bar = stack.enter_context(_progress_bar(n_frames, desc="odometry", unit="frame"))
         recorder = None
         if args.mcap is not None or args.rrd is not None:  # the recorder always writes MCAP: a discarded copy
             mcap = args.mcap or Path(stack.enter_context(tempfile.TemporaryDirectory())) / "odometry.mcap"
             recorder = stack.enter_context(OdometryRecorder(mcap, args.rrd, params=params, groundtruth=groundtruth,
-                                                            intrinsics=options["intrinsics"]))
+                                                            intrinsics=intrinsics,
+                                                            camera_frame=sequence.camera_frame))
 
         def advance(frame):
             bar.update()
@@ -422,21 +420,30 @@ def _odometry(args):
         result = run_odometry(sequence, args.method, frames, callback=advance, **options)
         if recorder is not None:
             recorder.finish(result.trajectory)
-        metrics = (drift_metrics(result.trajectory, sequence.groundtruth) if groundtruth is not None else
-                   {"ate_rmse_m": None, "rpe_translation_m_s": None, "rpe_rotation_deg_s": None})
+        metrics = drift_metrics(result.trajectory, sequence.groundtruth)  # all None without ground truth
         if args.output is not None:
             write_trajectory(args.output, result.trajectory,
-                             header=f"dgmm {args.method} odometry of {name}, intrinsics {camera}")
+                             header=f"dgmm {args.method} odometry of {sequence.name}, intrinsics {camera}")
     seconds = float(result.prepare_seconds.mean() + result.registration_seconds.mean())
-    print(json.dumps({"sequence": name, "method": args.method, "variant": args.variant, "intrinsics": camera,
-                      "frames": n_frames, **metrics, "seconds_per_frame": seconds,
+    print(json.dumps({"sequence": sequence.name, "method": args.method, "variant": args.variant,
+                      "intrinsics": camera, "frames": n_frames, **metrics, "seconds_per_frame": seconds,
                       "cpu_seconds_per_frame": float(result.cpu_seconds.mean())}))
 
 
 def _odometry_arguments(parser):
     """Arguments of ``dgmm odometry``."""
-    parser.add_argument("sequence", type=Path, metavar="SEQUENCE_DIR",
-                        help="TUM RGB-D sequence folder (depth.txt, depth/*.png, optional groundtruth.txt)")
+    parser.add_argument("sequence", type=Path, metavar="SEQUENCE",
+                        help="TUM RGB-D sequence folder (depth.txt, depth/*.png, optional groundtruth.txt), or a "
+                             "ROS 2 recording: an .mcap file or a bag folder (metadata.yaml and its .mcap files)")
+    parser.add_argument("--depth-topic", metavar="TOPIC",
+                        help="a recording's depth images: sensor_msgs/msg/Image or foxglove.RawImage, 16UC1 (mm) "
+                             "or 32FC1 (m)")
+    parser.add_argument("--camera-info-topic", metavar="TOPIC",
+                        help="a recording's sensor_msgs/msg/CameraInfo, whose K gives the intrinsics (default: the "
+                             "camera_info topic beside the depth topic)")
+    parser.add_argument("--groundtruth", type=Path, metavar="FILE",
+                        help="ground-truth poses (TUM trajectory format) to score the trajectory against (default: "
+                             "a TUM folder's groundtruth.txt; without any, ATE and RPE are null)")
     parser.add_argument("--method", choices=("gmm-pixels", "gmm-points", "icp"), default="gmm-pixels",
                         help="GMM of pixel rectangles or of points with D2D registration, or point-to-point ICP on "
                              "2,500 points (default: %(default)s)")
@@ -444,8 +451,8 @@ def _odometry_arguments(parser):
     parser.add_argument("--variant", choices=tuple(VARIANTS), default="textbook",
                         help="EM variant: textbook EM, or the authors' published code (default: %(default)s)")
     parser.add_argument("--intrinsics", metavar="fr1|fr2|fr3|ros|FX,FY,CX,CY",
-                        help="depth camera (default: from the folder name, rgbd_dataset_freiburgN_*: ros for "
-                             "freiburg 1 and 2, fr3 for freiburg 3)")
+                        help="depth camera (default: a recording's camera info; a TUM folder's name, "
+                             "rgbd_dataset_freiburgN_*: ros for freiburg 1 and 2, fr3 for freiburg 3)")
     parser.add_argument("--schedule", default="overlap", metavar="overlap|fast|common-view|reference",
                         help="every frame's EM start, EM iterations and D2D stages: overlap (the sweep's: few EM "
                              "iterations, D2D on what each frame sees and measures of the other), fast (the same "
@@ -543,7 +550,8 @@ COMMANDS = {
     "sample": Command("draw points from a model into a PLY point cloud",
                       "dgmm sample bunny.npz -n 10000 -o bunny_samples.ply", _sample_arguments, _sample),
     "view": Command("open a rerun recording in the rerun viewer", "dgmm view bunny.rrd", _view_arguments, _view),
-    "odometry": Command("frame-to-frame visual odometry of a TUM RGB-D folder; print ATE and RPE as JSON",
+    "odometry": Command("frame-to-frame visual odometry of a TUM RGB-D folder or a ROS 2 recording (MCAP); print "
+                        "the timings, and ATE and RPE when there is ground truth, as JSON",
                         "dgmm odometry rgbd_dataset_freiburg1_xyz --frames 100 -o trajectory.txt",
                         _odometry_arguments, _odometry),
 }

@@ -24,11 +24,13 @@ from dgmm import DataError, DgmmError, FitError, GaussianMixture, InputError, Pr
 from dgmm.data import load_mesh, save_ply
 from dgmm.model_io import load_model, save_model
 from dgmm.odometry import run_odometry
+from dgmm.odometry.ros2_mcap import read_recording
 from dgmm.registration import kabsch, random_trials, register_cpd, register_d2d, register_icp, register_p2d
 from dgmm.odometry.tum import read_sequence
 
 from conftest import SHARED_DATA
 from tests.test_odometry_cli import small_sequence
+from tests.test_odometry_mcap import DEPTH, INFO, camera_info, image, write_images
 
 DGMM = str(Path(sys.executable).parent / "dgmm")
 BUNNY = SHARED_DATA / "stanford" / "bunny_res4.ply"
@@ -66,6 +68,13 @@ def odometry(folder, *args, match):
     """``dgmm odometry`` of one of the broken sequences of :func:`inputs`, writing into ``{o}``."""
     return cli_case("odometry", f"{{i}}/rgbd_dataset_freiburg3_{folder}", "--method", "icp", "-o", "{o}/t.txt",
                     "--rrd", "{o}/o.rrd", *args, match=match)
+
+
+def recording(name, *args, match):
+    """``dgmm odometry`` of one of the broken ROS 2 recordings of :func:`inputs` (depth on ``DEPTH``), writing
+    into ``{o}``."""
+    return cli_case("odometry", f"{{i}}/{name}", "--depth-topic", DEPTH, "--method", "icp", "-o", "{o}/t.txt",
+                    "--mcap", "{o}/o.mcap", *args, match=match)
 
 
 def points(n=200, seed=0):
@@ -167,6 +176,31 @@ CASES = {
     "odometry output is a directory": odometry("good", "-o", "{o}", match="is a directory"),
     "odometry --mcap folder missing": odometry("good", "--mcap", "{o}/no/o.mcap", match="does not exist"),
     "odometry bad intrinsics": odometry("good", "--intrinsics", "1,2", match="intrinsics"),
+    "odometry recording without --depth-topic": cli_case("odometry", "{i}/good.mcap", "-o", "{o}/t.txt",
+                                                         match="good.mcap: .*--depth-topic"),
+    "odometry recording missing topic": recording(
+        "good.mcap", "--depth-topic", "/nope",
+        match=f"good.mcap: no messages on topic /nope \\(topics: {INFO} \\(sensor_msgs/msg/CameraInfo\\), "
+              f"{DEPTH} \\(sensor_msgs/msg/Image\\)\\)"),
+    "odometry recording of another type": recording("good.mcap", "--depth-topic", INFO,
+                                                    match=f"{INFO} message 0: a sensor_msgs/msg/CameraInfo message"),
+    "odometry recording unsupported encoding": recording(
+        "rgb8.mcap", match=f"rgb8.mcap: {DEPTH} message 1: encoding 'rgb8'; dgmm reads depth images in 16UC1 or 32FC1"),
+    "odometry recording of two sizes": recording("sizes.mcap", match="message 2: 6x4 image; message 0 is 8x6"),
+    "odometry recording without camera info": recording(
+        "noinfo.mcap", match=f"noinfo.mcap: no camera info on {INFO} .*--intrinsics"),
+    "odometry recording camera info of another size": recording("infosize.mcap",
+                                                                match=f"{INFO}: width x height 4x3, .* 8x6"),
+    "odometry recording truncated": recording("truncated.mcap", match="truncated.mcap: .*truncated or corrupt"),
+    "odometry recording corrupt": recording("corrupt.mcap", match="corrupt.mcap: .*truncated or corrupt"),
+    "odometry bag folder without its .mcap": recording("bag", match="bag_0.mcap: listed in .*metadata.yaml but missing"),
+    "odometry recording timestamps backwards": recording(
+        "backwards.mcap", match="message 2: header stamp 1.000000000 s is not after .* 2.000000000 s"),
+    "odometry --groundtruth missing": recording("good.mcap", "--groundtruth", "{i}/missing.txt",
+                                                match="missing.txt"),
+    # ---- a recording read by the library
+    "read_recording missing topic": Lib(lambda c: read_recording(c.folder / "good.mcap", "/nope"), DataError,
+                                        "no messages on topic /nope"),
 }
 
 
@@ -185,6 +219,20 @@ def inputs(tmp_path_factory):
     small_sequence(folder / "rgbd_dataset_freiburg3_nolisting")
     (folder / "rgbd_dataset_freiburg3_nolisting" / "depth.txt").unlink()
     small_sequence(folder / "rgbd_dataset_freiburg3_oneframe", n_frames=1)
+    second = 10**9
+    good = write_images(folder / "good.mcap", [image(k * second) for k in (1, 2, 3)], camera_info())
+    write_images(folder / "noinfo.mcap", [image(k * second) for k in (1, 2, 3)])
+    write_images(folder / "infosize.mcap", [image(k * second) for k in (1, 2, 3)], camera_info(width=4, height=3))
+    write_images(folder / "rgb8.mcap", [image(second), image(2 * second, encoding="rgb8", data=bytes(144))])
+    write_images(folder / "sizes.mcap", [image(second), image(2 * second), image(3 * second, width=6, height=4)])
+    write_images(folder / "backwards.mcap", [image(k * second) for k in (1, 2, 1)], camera_info())
+    data = good.read_bytes()
+    (folder / "truncated.mcap").write_bytes(data[:len(data) // 2])
+    (folder / "corrupt.mcap").write_bytes(data[:len(data) // 3] + bytes([data[len(data) // 3] ^ 0xFF])
+                                          + data[len(data) // 3 + 1:])
+    (folder / "bag").mkdir()
+    (folder / "bag" / "metadata.yaml").write_text(
+        "rosbag2_bagfile_information:\n  storage_identifier: mcap\n  relative_file_paths: [bag_0.mcap]\n")
     return SimpleNamespace(folder=folder, model=model)
 
 

@@ -90,3 +90,14 @@ def test_fig6_draws_the_ground_truth_and_each_estimate_aligned_with_its_ate():
     ate = {label: float(re.search(r"ATE (\S+) m", label).group(1)) for label in (moved_label, scaled_label)}
     assert ate[moved_label] < 1e-9
     assert ate[scaled_label] == pytest.approx(0.3 * spread, rel=1e-3)  # the label's 3 significant digits
+
+
+def test_fig6_of_a_recording_without_ground_truth_draws_the_estimate_as_it_is():
+    """No ground truth (a recording's): no ground-truth line, no ATE, the estimate's own x and z (the first
+    camera's frame seen from above), beside a panel with ground truth."""
+    truth = hand_made_trajectory()
+    figure = fig6({"scored": (truth, {"icp": truth}), "unscored": (None, {"icp": truth})})
+    _, ax = figure.axes
+    (line,) = ax.lines
+    assert line.get_label() == "ICP" and "no ground truth" in ax.get_title()
+    np.testing.assert_allclose(np.column_stack([line.get_xdata(), line.get_ydata()]), truth.translations[:, [0, 2]])

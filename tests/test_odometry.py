@@ -11,7 +11,7 @@ from scipy.spatial.transform import Rotation
 from threadpoolctl import threadpool_limits
 
 from dgmm.errors import DataError
-from dgmm.odometry import odometry_runs, run_odometry
+from dgmm.odometry import groundtruth_at_frames, odometry_runs, run_odometry
 from dgmm.odometry.pixels import FR3, backproject, pixel_primitives
 from dgmm.odometry.metrics import absolute_trajectory_error
 from dgmm.odometry.tum import (DEPTH_SCALE, Trajectory, associate, read_depth, read_sequence, read_trajectory,
@@ -93,7 +93,7 @@ def test_synthetic_sequence_round_trip(sequence):
     # Ground truth at 100 Hz, depth at 30 Hz on average: every frame finds its exact ground-truth row.
     assert np.all(np.diff(sequence.groundtruth.timestamps) == pytest.approx(0.01, abs=1e-6))
     assert 1 / np.mean(np.diff(sequence.depth_timestamps)) == pytest.approx(30, rel=0.05)
-    frames, poses = sequence.groundtruth_at_frames()
+    frames, poses = groundtruth_at_frames(sequence)
     assert frames.tolist() == list(range(N_FRAMES))
     nearest = np.abs(sequence.depth_timestamps[:, None] - sequence.groundtruth.timestamps[None]).argmin(axis=1)
     np.testing.assert_array_equal(poses.translations, sequence.groundtruth.translations[nearest])
@@ -146,7 +146,7 @@ def test_synthetic_generator_is_deterministic(scene, tmp_path):
 def test_synthetic_groundtruth_agrees_with_depth(sequence, scene):
     """Back-project frame j, move it into frame i by the ground-truth relative pose, and cast a ray from camera
     i through each point: the point lies on the scene surface that ray hits, up to the depth noise."""
-    frames, poses = sequence.groundtruth_at_frames()
+    frames, poses = groundtruth_at_frames(sequence)
     i, j = 0, N_FRAMES - 1
     points_j = backproject(sequence.depth(j))
     r_i, t_i, r_j, t_j = poses.rotations[i], poses.translations[i], poses.rotations[j], poses.translations[j]
@@ -215,7 +215,7 @@ def test_odometry_on_synthetic_sequence(sequence, method, warm_iter, scale_error
     the path, 9 mm, let a GMM odometry 15% short pass.)
     """
     frames = np.arange(0, N_FRAMES, 2)
-    groundtruth = sequence.groundtruth_at_frames()[1].subset(frames)
+    groundtruth = groundtruth_at_frames(sequence)[1].subset(frames)
     path_length = np.linalg.norm(np.diff(groundtruth.translations, axis=0), axis=1).sum()
     logged = []
     with threadpool_limits(1):

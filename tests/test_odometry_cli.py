@@ -127,7 +127,8 @@ def test_rrd_opens_on_its_blueprint(tmp_path):
                         "--rrd", tmp_path / "o.rrd")
     assert run.returncode == 0, run.stderr
     timeline, views = read_blueprint(tmp_path / "o.rrd")
-    assert timeline == "frame" and set(views) == {"camera path", "current frame's model", "seconds per frame"}
+    assert timeline == "frame" and set(views) == {"camera path", "depth image", "current frame's model",
+                                                  "seconds per frame"}
     assert sorted(read_rrd(tmp_path / "o.rrd", "/world/camera/model")["frame"]) == [0, 1, 2]
 
 

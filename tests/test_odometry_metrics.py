@@ -10,6 +10,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from dgmm.errors import InputError
+from dgmm.odometry import groundtruth_at_frames
 from dgmm.odometry.pixels import CAMERAS, parse_intrinsics, sequence_intrinsics
 from dgmm.odometry.metrics import absolute_trajectory_error, drift_metrics, frame_motions, relative_pose_error
 from dgmm.odometry.tum import Trajectory, read_sequence, read_trajectory, write_trajectory
@@ -20,7 +21,7 @@ needs_fr1 = pytest.mark.skipif(not (FR1_XYZ / "groundtruth.txt").is_file(), reas
 
 def drifting_estimate(sequence, n_frames, seed):
     """Ground truth at the first depth frames, in another world frame, with random-walk drift in both parts."""
-    frames, truth = sequence.groundtruth_at_frames()
+    frames, truth = groundtruth_at_frames(sequence)
     truth = truth.subset(np.arange(min(n_frames, len(frames))))
     rng = np.random.default_rng(seed)
     drift = Rotation.from_rotvec(np.cumsum(rng.normal(scale=0.004, size=(len(truth), 3)), axis=0)).as_matrix()
@@ -162,19 +163,22 @@ def test_drift_metrics_fall_back_to_no_rpe_below_one_window():
 
 
 class _HandMadeSequence:
-    """Just what ``run_odometry`` reads of a TUM sequence: frame count, depth images (filled with the frame index,
-    so the stand-in method below knows which frame it sees), timestamps."""
+    """Just what ``run_odometry`` reads of a sequence (``dgmm.odometry.sequence.DepthSequence``): frame count,
+    depth images (filled with the frame index, so the stand-in method below knows which frame it sees),
+    timestamps."""
 
     def __init__(self, n_frames, intrinsics):
         self.depth_timestamps = 1.0 + np.arange(n_frames) / 30
-        self.depth_files = [f"depth/{k}.png" for k in range(n_frames)]
         self._shape = (intrinsics.height, intrinsics.width)
 
     def __len__(self):
         return len(self.depth_timestamps)
 
-    def depth(self, index):
-        return np.full(self._shape, float(index))
+    def depth_frames(self, indices):
+        return (np.full(self._shape, float(index)) for index in indices)
+
+    def frame_source(self, index):
+        return f"frame {index}"
 
 
 def test_odometry_composes_relative_poses_in_order(monkeypatch):

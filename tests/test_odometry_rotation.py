@@ -14,7 +14,8 @@ import pytest
 from scipy.spatial.transform import Rotation
 from threadpoolctl import threadpool_limits
 
-from dgmm.odometry import CAMERAS, first_frames, pixel_primitives, read_sequence, run_odometry
+from dgmm.odometry import (CAMERAS, first_frames, groundtruth_at_frames, pixel_primitives, read_sequence,
+                           run_odometry)
 from dgmm.odometry.em_start import lloyd_start
 from dgmm.odometry.frame_model import REG_COVAR, SCHEDULES, _fit_mixture
 from dgmm.odometry.measured_cut import register_cut_rounds, register_measured
@@ -130,7 +131,7 @@ def test_no_gross_failure_on_spun_fr1_xyz(tmp_path, start, seed):
     gmm-pixels with the sweep's schedule is within 2° and 3 cm of the truth, with either EM."""
     sequence = write_spun_sequence(tmp_path / "spun", read_sequence(FR1_XYZ), np.arange(start, start + 60),
                                    PEAK_DEG_S, seed, ROS)
-    _, truth = sequence.groundtruth_at_frames()
+    _, truth = groundtruth_at_frames(sequence)
     for variant in ("textbook", "authors"):
         with threadpool_limits(1):
             result = run_odometry(sequence, "gmm-pixels", intrinsics=ROS, variant=variant)
@@ -173,7 +174,7 @@ def _spinning_room(folder, scene, n_frames):
 
 def _frame_errors(sequence, schedule, variant):
     """Every frame-to-frame registration's (deg, m) error against the rendered ground truth."""
-    _, truth = sequence.groundtruth_at_frames()
+    _, truth = groundtruth_at_frames(sequence)
     with threadpool_limits(1):
         result = run_odometry(sequence, "gmm-pixels", intrinsics=FR3, schedule=schedule, variant=variant)
     return np.array([relative_error(

@@ -391,22 +391,39 @@ def test_odometry_recorder_writes_trajectories_and_its_blueprint(tmp_path):
     truth = Trajectory(np.arange(n_frames) * 0.5 + 100.0, rotations, translations)
     model = GaussianMixture(3, max_iter=5, random_state=0).fit(blobs(seed=3, n_per_blob=30))
     mcap_path, rrd_path = tmp_path / "odometry.mcap", tmp_path / "odometry.rrd"
-    with OdometryRecorder(mcap_path, rrd_path, groundtruth=truth) as recorder:
+    depth = np.full((480, 640), 1.2345)  # metres: logged at every 4th pixel in millimetres, 1235
+    with OdometryRecorder(mcap_path, rrd_path, groundtruth=truth, camera_frame="depth_optical") as recorder:
         for index in range(n_frames):
             registration = None if index == 0 else Registration(np.eye(3), np.zeros(3), 4, 0.01, 1.5, True, "d2d")
             recorder(OdometryFrame(index, float(truth.timestamps[index]), rotations[index], translations[index],
-                                   model, 0.02, registration, None if index == 0 else 0.03))
+                                   model, 0.02, registration, None if index == 0 else 0.03, depth))
         recorder.finish(truth)
 
     timeline, views = read_blueprint(rrd_path)
     assert timeline == "frame"
     assert views == {"camera path": ("3D", "/world", ["$origin/**"]),
+                     "depth image": ("2D", "/world/camera/image", ["$origin/**"]),
                      "current frame's model": ("3D", "/world/camera", ["/world/camera/model"]),
                      "seconds per frame": ("TimeSeries", "/seconds", ["$origin/**"])}
     assert sorted(read_rrd(rrd_path, "/world/camera/model")["frame"]) == list(range(n_frames))
     assert sorted(read_rrd(rrd_path, "/seconds/model")["frame"]) == list(range(n_frames))
+    image = read_rrd(rrd_path, "/world/camera/image")
+    assert sorted(frame for frame in image["frame"] if frame is not None) == list(range(n_frames))
+    assert {stamp for stamp in image["timestamp"] if stamp is not None} == {
+        np.datetime64(int(stamp * 1e9), "ns") for stamp in truth.timestamps}
 
-    by_topic = {topic: (message, log_time) for topic, _, message, log_time in read_mcap(mcap_path)}
+    messages = read_mcap(mcap_path)
+    by_topic = {topic: (message, log_time) for topic, _, message, log_time in messages}
+    assert messages[0][0] == "/odometry/params" and messages[0][3] == int(truth.timestamps[0] * 1e9)
+    poses = [(message, log_time) for topic, _, message, log_time in messages if topic == "/odometry/pose"]
+    assert [log_time for _, log_time in poses] == [int(stamp * 1e9) for stamp in truth.timestamps]
+    np.testing.assert_array_equal([xyz(pose.pose.position) for pose, _ in poses], translations)
+    transforms = [message for topic, _, message, _ in messages if topic == "/odometry/transforms"]
+    assert [(t.parent_frame_id, t.child_frame_id) for t in transforms] == [("world", "odometry")] + [
+        ("odometry", "depth_optical")] * n_frames
+    for transform, rotation, translation in zip(transforms[1:], rotations, translations):
+        np.testing.assert_allclose(quaternion_matrix(xyz(transform.rotation, "xyzw")), rotation, atol=1e-12)
+        np.testing.assert_array_equal(xyz(transform.translation), translation)
     # The frame's whole registration time (0.03 s), not its solver's (Registration.seconds, 0.01 s).
     assert by_topic["/odometry/frame"][0]["registration_seconds"] == 0.03
     estimated, log_time = by_topic["/odometry/estimated"]

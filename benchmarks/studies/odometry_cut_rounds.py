@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from dgmm.odometry import frame_motions
+from dgmm.odometry import frame_motions, groundtruth_at_frames
 from dgmm.odometry.frame_model import SCHEDULES, _prepare_pixels
 from dgmm.odometry.measured_cut import _cut_mixture, register_measured, unseen_primitives
 from dgmm.odometry.overlap import register_d2d_overlap
@@ -37,7 +37,7 @@ def main():
     args = parser.parse_args()
     sequence = room_sequence(ROOT / "results" / "benchmarks" / f"room-spin-110-seed{args.seed}-40", 40, args.seed,
                              110.0)
-    _, truth = sequence.groundtruth_at_frames()
+    _, truth = groundtruth_at_frames(sequence)
     schedule = SCHEDULES["overlap"]
     motions = list(zip(*frame_motions(truth)))
     print(f"room seed {args.seed}: {len(motions)} pairs; translation error (cm) after each stage: worst, median "

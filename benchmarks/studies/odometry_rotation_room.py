@@ -30,7 +30,7 @@ import numpy as np
 import trimesh
 from threadpoolctl import threadpool_limits
 
-from dgmm.odometry import frame_motions, pixel_primitives, read_sequence, run_odometry
+from dgmm.odometry import frame_motions, groundtruth_at_frames, pixel_primitives, read_sequence, run_odometry
 from dgmm.odometry.frame_model import SCHEDULES, _fit_mixture
 from dgmm.odometry.overlap import register_d2d_overlap, seen_by
 from dgmm.odometry.pixels import FR3, PIXEL_STEP, backproject
@@ -78,7 +78,7 @@ def main():
     args = parser.parse_args()
     folder = Path(args.cache) / f"room-spin-{args.peak:g}-seed{args.seed}-{args.n_frames}"
     sequence = room_sequence(folder, args.n_frames, args.seed, args.peak)
-    _, truth = sequence.groundtruth_at_frames()
+    _, truth = groundtruth_at_frames(sequence)
     n = len(sequence)
     motions = list(zip(*frame_motions(truth)))
     steps = [rotation_distance_deg(r, np.eye(3)) for r, _ in motions]

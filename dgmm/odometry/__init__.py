@@ -1,8 +1,13 @@
-"""Frame-to-frame visual odometry with Gaussian mixtures on TUM RGB-D sequences (paper §VI-D "Visual Odometry").
+"""Frame-to-frame visual odometry with Gaussian mixtures on depth sequences (paper §VI-D "Visual Odometry"): TUM
+RGB-D folders and ROS 2 recordings (MCAP).
 
 The public namespace; one concept per module:
 
+- :mod:`~dgmm.odometry.sequence`: the one interface both kinds of sequence are read through, opening either kind,
+  and their ground truth at the frames;
 - :mod:`~dgmm.odometry.tum`: TUM RGB-D files (depth PNGs, trajectories, sequences) and timestamp association;
+- :mod:`~dgmm.odometry.ros2_mcap`: ROS 2 recordings in MCAP (depth images, camera info), read streaming and
+  written (imported on its own: mcap);
 - :mod:`~dgmm.odometry.depth_png`: fast decoding of TUM's 16-bit depth PNGs (ISA-L's inflate, PIL for the rest);
 - :mod:`~dgmm.odometry.pixels`: camera intrinsics, back-projection and pixel-rectangle primitives;
 - :mod:`~dgmm.odometry.frame_model`: each method's per-frame model (a GMM, or ICP's points), the per-frame
@@ -23,10 +28,12 @@ from dgmm.odometry.loop import Odometry, OdometryFrame, frame_seconds, run_odome
 from dgmm.odometry.metrics import absolute_trajectory_error, drift_metrics, frame_motions, relative_pose_error
 from dgmm.odometry.pixels import (CAMERAS, Intrinsics, backproject, parse_intrinsics, pixel_primitives,
                                   sequence_intrinsics)
-from dgmm.odometry.tum import Trajectory, TumSequence, first_frames, read_sequence, read_trajectory, write_trajectory
+from dgmm.odometry.sequence import DepthSequence, first_frames, groundtruth_at_frames, open_sequence
+from dgmm.odometry.tum import Trajectory, TumSequence, read_sequence, read_trajectory, write_trajectory
 
-__all__ = ["CAMERAS", "METHODS", "MIXTURE_METHODS", "SCHEDULES", "UNSIZED_METHODS", "Intrinsics", "Odometry",
-           "OdometryFrame", "Schedule", "Trajectory", "TumSequence", "absolute_trajectory_error", "backproject",
-           "drift_metrics", "first_frames", "frame_motions", "frame_seconds", "odometry_runs", "parse_intrinsics",
-           "pixel_primitives", "read_sequence", "read_trajectory", "relative_pose_error", "run_odometry",
-           "seconds_summary", "sequence_intrinsics", "write_trajectory"]
+__all__ = ["CAMERAS", "METHODS", "MIXTURE_METHODS", "SCHEDULES", "UNSIZED_METHODS", "DepthSequence", "Intrinsics",
+           "Odometry", "OdometryFrame", "Schedule", "Trajectory", "TumSequence", "absolute_trajectory_error",
+           "backproject", "drift_metrics", "first_frames", "frame_motions", "frame_seconds", "groundtruth_at_frames",
+           "odometry_runs", "open_sequence", "parse_intrinsics", "pixel_primitives", "read_sequence",
+           "read_trajectory", "relative_pose_error", "run_odometry", "seconds_summary", "sequence_intrinsics",
+           "write_trajectory"]

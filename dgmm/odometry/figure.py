@@ -37,25 +37,33 @@ def _run_style(run):
 
 
 def _panel(axes, groundtruth, estimates, plane, sequence, max_difference):
-    """One sequence's top-down view: the ground truth over the estimates' span and each aligned estimate."""
+    """One sequence's top-down view: the ground truth over the estimates' span and each aligned estimate; without
+    ground truth, each estimate as it is, in the first camera's frame seen from above (its x–z plane)."""
+    plane = plane if groundtruth is not None else "xz"
     h, v = PLANES[plane]
-    span = [min(e.timestamps[0] for e in estimates.values()), max(e.timestamps[-1] for e in estimates.values())]
-    inside = (groundtruth.timestamps >= span[0] - max_difference) & (groundtruth.timestamps <= span[1] + max_difference)
-    truth = groundtruth.translations[inside]
-    axes.plot(truth[:, h], truth[:, v], color="black", lw=2.0, label="ground truth")
-    axes.plot(truth[0, h], truth[0, v], "o", color="black", ms=5)
+    if groundtruth is not None:
+        span = [min(e.timestamps[0] for e in estimates.values()), max(e.timestamps[-1] for e in estimates.values())]
+        inside = ((groundtruth.timestamps >= span[0] - max_difference)
+                  & (groundtruth.timestamps <= span[1] + max_difference))
+        truth = groundtruth.translations[inside]
+        axes.plot(truth[:, h], truth[:, v], color="black", lw=2.0, label="ground truth")
+        axes.plot(truth[0, h], truth[0, v], "o", color="black", ms=5)
     for run, estimate in estimates.items():
-        error = absolute_trajectory_error(estimate, groundtruth, max_difference)
-        aligned = estimate.translations @ error.rotation.T + error.translation
         label, color, style = _run_style(run)
-        axes.plot(aligned[:, h], aligned[:, v], color=color, ls=style, lw=1.4, label=f"{label} (ATE {error.rmse:.3g} m)")
+        positions = estimate.translations
+        if groundtruth is not None:
+            error = absolute_trajectory_error(estimate, groundtruth, max_difference)
+            positions = positions @ error.rotation.T + error.translation
+            label = f"{label} (ATE {error.rmse:.3g} m)"
+        axes.plot(positions[:, h], positions[:, v], color=color, ls=style, lw=1.4, label=label)
     axes.set_aspect("equal", adjustable="datalim")
     axes.set_xlabel(f"{'xyz'[h]} (m)")
     axes.set_ylabel(f"{'xyz'[v]} (m)")
     axes.grid(True, alpha=0.3)
     axes.legend(loc="best", fontsize=7)
     n_frames = max(len(e) for e in estimates.values())
-    axes.set_title(f"{sequence}: top-down ({plane}), {n_frames} frames", fontsize=10)
+    where = f"top-down ({plane})" if groundtruth is not None else "no ground truth, first camera's x-z"
+    axes.set_title(f"{sequence}: {where}, {n_frames} frames", fontsize=10)
 
 
 def fig6(panels, *, plane="xy", max_difference=MAX_TIME_DIFFERENCE):
@@ -63,9 +71,10 @@ def fig6(panels, *, plane="xy", max_difference=MAX_TIME_DIFFERENCE):
 
     Parameters
     ----------
-    panels : dict of str to (dgmm.odometry.tum.Trajectory, dict of str to dgmm.odometry.tum.Trajectory)
+    panels : dict of str to (dgmm.odometry.tum.Trajectory or None, dict of str to dgmm.odometry.tum.Trajectory)
         Sequence name -> (its ground truth, run name -> estimated trajectory), drawn left to right in this order;
-        only the part of the ground truth spanned by the estimates' timestamps is drawn. Run names are
+        only the part of the ground truth spanned by the estimates' timestamps is drawn. A sequence without ground
+        truth (None; a recording's) is drawn unaligned, in its first camera's frame from above. Run names are
         ``method`` or ``method-variant`` (colour by method, line style by EM variant).
     plane : {"xy", "xz", "yz"}, default="xy"
         World axes of the top-down view (z-up worlds: "xy").
@@ -93,13 +102,14 @@ def fig6_from_files(panels, **options):
 
     Parameters
     ----------
-    panels : dict of str to (path-like, dict of str to path-like)
-        Sequence name -> (its ``groundtruth.txt``, run name -> its estimated trajectory file
+    panels : dict of str to (path-like or None, dict of str to path-like)
+        Sequence name -> (its ``groundtruth.txt`` or None, run name -> its estimated trajectory file
         ``results/odometry/{sequence}/{run}/trajectory.txt``).
     **options
         Passed to :func:`fig6`.
     """
-    return fig6({sequence: (read_trajectory(truth), {run: read_trajectory(path) for run, path in runs.items()})
+    return fig6({sequence: (None if truth is None else read_trajectory(truth),
+                            {run: read_trajectory(path) for run, path in runs.items()})
                  for sequence, (truth, runs) in panels.items()}, **options)
 
 

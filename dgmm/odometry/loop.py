@@ -1,6 +1,8 @@
-"""The frame-to-frame odometry loop over a TUM RGB-D sequence (paper §VI-D "Visual Odometry"), and its timings.
+"""The frame-to-frame odometry loop over a depth sequence (paper §VI-D "Visual Odometry"), and its timings.
 
-Files and poses follow :mod:`dgmm.odometry.tum` (camera → world, ``x_w = R x_c + t``), the frames' models and
+The sequence is a TUM RGB-D folder or a ROS 2 recording, read through one interface
+(:class:`dgmm.odometry.sequence.DepthSequence`), frame by frame. Poses follow :mod:`dgmm.odometry.tum`
+(camera → world, ``x_w = R x_c + t``), the frames' models and
 their registration :mod:`dgmm.odometry.frame_model`. Odometry registers frame ``k+1`` (moving) onto frame ``k``
 (fixed); the transform returned maps camera ``k+1`` coordinates into camera ``k`` coordinates, i.e. the relative
 pose ``T_k⁻¹ T_{k+1}``, and the poses are composed from the identity at the first frame. Registration starts from
@@ -41,6 +43,8 @@ class OdometryFrame:
     registration_seconds : float or None
         Time of that registration, all of it (a schedule's rounds and cuts; ``registration.seconds`` counts only
         its solvers' time).
+    depth : ndarray of shape (height, width) or None
+        The frame's depth image in metres (what the rerun recording shows under the camera path).
     """
 
     index: int
@@ -51,6 +55,7 @@ class OdometryFrame:
     prepare_seconds: float
     registration: Registration | None
     registration_seconds: float | None
+    depth: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -84,17 +89,19 @@ class Odometry:
 
 def run_odometry(sequence, method, frames=None, *, intrinsics=FR3, n_components=100, schedule="overlap", warm_iter=None,
                  variant="textbook", size="area", n_icp_points=2500, icp_tol=1e-9, seed=0, callback=None):
-    """Frame-to-frame visual odometry over a TUM sequence (paper §VI-D).
+    """Frame-to-frame visual odometry over a depth sequence (paper §VI-D).
 
     Each frame's model is built once (a GMM, or ICP's random points) and registered onto the previous frame's
     from the identity; the relative motions are composed into poses.
 
     Parameters
     ----------
-    sequence : dgmm.odometry.tum.TumSequence
+    sequence : dgmm.odometry.sequence.DepthSequence
+        A TUM folder (``dgmm.odometry.tum.read_sequence``) or a ROS 2 recording
+        (``dgmm.odometry.ros2_mcap.read_recording``); its frames are read one at a time.
     method : {"gmm-pixels", "gmm-points", "icp"}
     frames : array-like of int, optional
-        Frame indices to use, in order (e.g. ``range(300)``); all frames when omitted.
+        Frame indices to use, increasing (e.g. ``range(300)``); all frames when omitted.
     intrinsics : dgmm.odometry.pixels.Intrinsics, default=FR3
     n_components : int
         GMM size (paper: K=100).
@@ -124,7 +131,7 @@ def run_odometry(sequence, method, frames=None, *, intrinsics=FR3, n_components=
     Raises
     ------
     DataError
-        A depth image is unreadable or not of the intrinsics' size (the message names the file).
+        A depth image is unreadable or not of the intrinsics' size (the message names the file or message).
     """
     if method not in METHODS:
         raise InputError(f"method must be one of {sorted(METHODS)}, got {method!r}")
@@ -133,18 +140,18 @@ def run_odometry(sequence, method, frames=None, *, intrinsics=FR3, n_components=
     if warm_iter is not None and warm_iter < 1:
         raise InputError(f"warm_iter must be a positive number of EM iterations or None, got {warm_iter!r}")
     indices = np.arange(len(sequence)) if frames is None else np.asarray(frames, dtype=int)
-    if len(indices) < 2 or indices.min() < 0 or indices.max() >= len(sequence):
-        raise InputError(f"odometry needs at least 2 frame indices in 0..{len(sequence) - 1}")
+    if len(indices) < 2 or indices.min() < 0 or indices.max() >= len(sequence) or np.any(np.diff(indices) <= 0):
+        raise InputError(f"odometry needs at least 2 increasing frame indices in 0..{len(sequence) - 1}")
     prepare, register = METHODS[method]
     options = {"n_components": n_components, "warm_iter": warm_iter,
                "schedule": schedule if isinstance(schedule, Schedule) else SCHEDULES[schedule], "variant": variant,
                "size": size, "n_icp_points": n_icp_points, "icp_tol": icp_tol, "intrinsics": intrinsics}
     rotations, translations = [np.eye(3)], [np.zeros(3)]
     previous, prepare_seconds, registrations, registration_seconds, cpu_seconds = None, [], [], [], []
-    for index in indices:  # sequential by nature: each pose composes the previous one
-        depth = sequence.depth(index)
+    # sequential by nature: each pose composes the previous one; frames stream from the sequence one at a time
+    for index, depth in zip(indices, sequence.depth_frames(indices), strict=True):
         if depth.shape != (intrinsics.height, intrinsics.width):
-            raise DataError(f"{sequence.depth_files[index]}: {depth.shape[1]}x{depth.shape[0]} image, the "
+            raise DataError(f"{sequence.frame_source(index)}: {depth.shape[1]}x{depth.shape[0]} image, the "
                             f"intrinsics are for {intrinsics.width}x{intrinsics.height}")
         start, cpu_start = time.perf_counter(), time.process_time()
         model = prepare(depth, intrinsics, np.random.default_rng([seed, int(index)]), previous, options)
@@ -161,7 +168,7 @@ def run_odometry(sequence, method, frames=None, *, intrinsics=FR3, n_components=
         if callback is not None:
             callback(OdometryFrame(int(index), float(sequence.depth_timestamps[index]), rotations[-1],
                                    translations[-1], model, prepare_seconds[-1], registration,
-                                   registration_seconds[-1] if registration is not None else None))
+                                   registration_seconds[-1] if registration is not None else None, depth))
         previous = model
     trajectory = Trajectory(sequence.depth_timestamps[indices], np.array(rotations), np.array(translations))
     return Odometry(method, trajectory, np.array(prepare_seconds), np.array(registration_seconds),

@@ -166,12 +166,21 @@ def relative_pose_error(estimate, reference, window=RPE_WINDOW_SECONDS, max_diff
 def drift_metrics(estimate, reference, max_difference=MAX_TIME_DIFFERENCE):
     """The odometry table's columns: ATE RMSE and the one-second RPE of ``estimate`` against ``reference``.
 
+    Parameters
+    ----------
+    estimate : Trajectory
+    reference : Trajectory or None
+        None: a sequence without ground truth, every entry None.
+    max_difference : float
+
     Returns
     -------
     metrics : dict
         ``ate_rmse_m``, ``rpe_translation_m_s``, ``rpe_rotation_deg_s``; the RPE entries are None when the paired
         frames span less than one window.
     """
+    if reference is None:
+        return {"ate_rmse_m": None, "rpe_translation_m_s": None, "rpe_rotation_deg_s": None}
     ate = absolute_trajectory_error(estimate, reference, max_difference)
     try:
         rpe = relative_pose_error(estimate, reference, max_difference=max_difference)

@@ -37,6 +37,7 @@ from scipy.spatial.transform import Rotation
 
 from dgmm.errors import InputError
 from dgmm.odometry.pixels import FR3, PIXEL_STEP
+from dgmm.odometry.sequence import groundtruth_at_frames
 from dgmm.odometry.tum import Trajectory, read_sequence, write_depth, write_trajectory
 
 TUM_EPOCH = 1341847980.0
@@ -478,7 +479,7 @@ def write_spun_sequence(folder, sequence, frames, peak_deg_s=90.0, seed=0, intri
     sequence : TumSequence
         With ground truth.
     frames : array-like of int
-        Source frames, in order; each must have a ground-truth pose (``TumSequence.groundtruth_at_frames``).
+        Source frames, in order; each must have a ground-truth pose (``dgmm.odometry.sequence.groundtruth_at_frames``).
     peak_deg_s, seed
         See :func:`spin`.
     intrinsics : Intrinsics
@@ -491,7 +492,7 @@ def write_spun_sequence(folder, sequence, frames, peak_deg_s=90.0, seed=0, intri
     folder = Path(folder)
     if folder.exists():
         raise InputError(f"{folder}: already exists; the spun sequence is written to a new folder")
-    matched, poses = sequence.groundtruth_at_frames()
+    matched, poses = groundtruth_at_frames(sequence)
     rows = np.searchsorted(matched, frames)
     if np.any(rows >= len(matched)) or np.any(matched[np.minimum(rows, len(matched) - 1)] != frames):
         raise InputError("write_spun_sequence: every frame needs a ground-truth pose")

@@ -19,6 +19,7 @@ from PIL import Image, UnidentifiedImageError
 from dgmm.errors import DataError, InputError
 from dgmm.files import atomic_open
 from dgmm.odometry.depth_png import decode_gray16, encode_gray16
+from dgmm.odometry.pixels import parse_intrinsics, sequence_intrinsics
 from dgmm.registration import matrix_to_quaternion, quaternion_to_matrix
 
 DEPTH_SCALE = 5000.0
@@ -213,6 +214,8 @@ def write_depth(path, depth):
 class TumSequence:
     """A TUM RGB-D sequence folder: its depth frames and, when present, its ground truth.
 
+    One of the two readers of ``dgmm.odometry.sequence.DepthSequence`` (the other reads ROS 2 recordings).
+
     Attributes
     ----------
     folder : pathlib.Path
@@ -220,13 +223,25 @@ class TumSequence:
     depth_files : tuple of pathlib.Path
         One per frame.
     groundtruth : Trajectory or None
-        ``groundtruth.txt``; None when the folder has none (TUM's validation sequences).
+        ``groundtruth.txt`` (or the file given to ``read_sequence``); None when there is none (TUM's validation
+        sequences).
+    groundtruth_file : pathlib.Path or None
+        The file ``groundtruth`` was read from.
     """
 
     folder: Path
     depth_timestamps: np.ndarray
     depth_files: tuple
     groundtruth: Trajectory | None
+    groundtruth_file: Path | None
+
+    camera_frame = "camera"
+    """TUM's files name no frame: the depth camera's is ``camera``."""
+
+    @property
+    def name(self):
+        """The folder's name (``rgbd_dataset_freiburg1_xyz``), which tells the camera."""
+        return self.folder.resolve().name
 
     def __len__(self):
         return len(self.depth_timestamps)
@@ -235,31 +250,43 @@ class TumSequence:
         """Depth of frame ``index`` in metres, shape (height, width)."""
         return read_depth(self.depth_files[index])
 
-    def groundtruth_at_frames(self, max_difference=MAX_TIME_DIFFERENCE):
-        """Frame indices with a ground-truth pose within ``max_difference`` s, and those poses.
+    def depth_frames(self, indices):
+        """Depth of each frame of ``indices``, in that order (``DepthSequence``: read one at a time)."""
+        return map(self.depth, indices)
+
+    def frame_source(self, index):
+        """The depth PNG of frame ``index``."""
+        return str(self.depth_files[index])
+
+    def camera(self, intrinsics=None):
+        """The depth camera: ``intrinsics`` (``fr1|fr2|fr3|ros|FX,FY,CX,CY``, 640×480) or, by default, the one
+        the folder's name tells (``rgbd_dataset_freiburgN_*``: ``dgmm.odometry.pixels.sequence_intrinsics``).
 
         Returns
         -------
-        frames : ndarray of shape (n_pairs,)
-        poses : Trajectory
-            Of ``n_pairs`` rows, stamped with the depth timestamps.
+        text : str
+        intrinsics : dgmm.odometry.pixels.Intrinsics
         """
-        if self.groundtruth is None:
-            raise DataError(f"{self.folder}: no groundtruth.txt")
-        frames, rows = associate(self.depth_timestamps, self.groundtruth.timestamps, max_difference)
-        poses = self.groundtruth.subset(rows)
-        return frames, Trajectory(self.depth_timestamps[frames], poses.rotations, poses.translations)
+        text = intrinsics or sequence_intrinsics(self.name)
+        return text, parse_intrinsics(text)
 
 
-def read_sequence(folder):
+def read_sequence(folder, groundtruth=None):
     """Read a TUM RGB-D sequence folder as published (``depth.txt``, ``depth/*.png``, ``groundtruth.txt``).
 
     Depth images are read lazily by ``TumSequence.depth``; ``rgb.txt`` is not used.
 
+    Parameters
+    ----------
+    folder : path-like
+    groundtruth : path-like, optional
+        A TUM trajectory file to use as ground truth in place of the folder's ``groundtruth.txt``.
+
     Raises
     ------
     DataError
-        The folder or ``depth.txt`` is missing or malformed, or lists no frames.
+        The folder or ``depth.txt`` is missing or malformed, or lists no frames; a ground-truth file given that
+        cannot be read.
     """
     folder = Path(folder)
     if not folder.is_dir():
@@ -269,38 +296,8 @@ def read_sequence(folder):
     if not rows:
         raise DataError(f"{listing}: lists no depth frames")
     timestamps = _floats(listing, [row[:1] for row in rows])[:, 0]
-    groundtruth_file = folder / "groundtruth.txt"
-    groundtruth = read_trajectory(groundtruth_file) if groundtruth_file.exists() else None
-    return TumSequence(folder, timestamps, tuple(folder / row[1] for row in rows), groundtruth)
-
-
-def first_frames(sequence, n_frames, max_difference=MAX_TIME_DIFFERENCE):
-    """The first ``n_frames`` frames of a sequence (all of them when it is shorter) and their ground truth.
-
-    Parameters
-    ----------
-    sequence : TumSequence
-    n_frames : int
-    max_difference : float
-
-    Returns
-    -------
-    frames : ndarray of shape (n_used,)
-        ``0, 1, …, min(n_frames, len(sequence)) − 1``.
-    groundtruth : Trajectory
-        Ground truth of those frames that have a partner within ``max_difference`` s, stamped with their depth
-        timestamps.
-
-    Raises
-    ------
-    DataError
-        The sequence has no ``groundtruth.txt``, or fewer than 3 of the frames have a ground-truth pose (the ATE
-        alignment would not be determined); the message names the file.
-    """
-    frames = np.arange(min(int(n_frames), len(sequence)))
-    matched, poses = sequence.groundtruth_at_frames(max_difference)
-    keep = matched < len(frames)
-    if keep.sum() < 3:
-        raise DataError(f"{sequence.folder / 'groundtruth.txt'}: only {int(keep.sum())} of the first {len(frames)} "
-                        f"depth frames have a ground-truth pose within {max_difference} s")
-    return frames, poses.subset(np.flatnonzero(keep))
+    if groundtruth is None and (folder / "groundtruth.txt").exists():
+        groundtruth = folder / "groundtruth.txt"
+    groundtruth = None if groundtruth is None else Path(groundtruth)
+    return TumSequence(folder, timestamps, tuple(folder / row[1] for row in rows),
+                       None if groundtruth is None else read_trajectory(groundtruth), groundtruth)

@@ -39,11 +39,12 @@ def registration_blueprint(trials):
 
 
 def odometry_blueprint():
-    """Visual odometry (:class:`~dgmm.recording.OdometryRecorder`): the camera path over the ground truth, the
-    current frame's mixture (or points) in camera coordinates and the seconds per frame, on the ``frame``
-    timeline."""
+    """Visual odometry (:class:`~dgmm.recording.OdometryRecorder`): the camera path over the ground truth with the
+    current depth image back-projected at the camera, that depth image, the current frame's mixture (or points)
+    in camera coordinates and the seconds per frame, on the ``frame`` timeline."""
     return _layout([rrb.Spatial3DView(name="camera path", origin="/world"),
-                    rrb.Vertical(rrb.Spatial3DView(name="current frame's model", origin="/world/camera",
+                    rrb.Vertical(rrb.Spatial2DView(name="depth image", origin="/world/camera/image"),
+                                 rrb.Spatial3DView(name="current frame's model", origin="/world/camera",
                                                    contents=["/world/camera/model"]),
                                  rrb.TimeSeriesView(name="seconds per frame", origin="/seconds"))],
                    "frame", column_shares=(1, 1))

@@ -1,9 +1,11 @@
-"""Foxglove messages of mixtures and poses, built with Foxglove's maintained protobuf types
+"""Foxglove messages of mixtures, poses and transforms, built with Foxglove's maintained protobuf types
 (``foxglove-schemas-protobuf``), so Foxglove draws them with no plugin."""
 import numpy as np
 from foxglove_schemas_protobuf.Color_pb2 import Color
+from foxglove_schemas_protobuf.FrameTransform_pb2 import FrameTransform
 from foxglove_schemas_protobuf.KeyValuePair_pb2 import KeyValuePair
 from foxglove_schemas_protobuf.Pose_pb2 import Pose
+from foxglove_schemas_protobuf.PoseInFrame_pb2 import PoseInFrame
 from foxglove_schemas_protobuf.PosesInFrame_pb2 import PosesInFrame
 from foxglove_schemas_protobuf.Quaternion_pb2 import Quaternion
 from foxglove_schemas_protobuf.SceneEntity_pb2 import SceneEntity
@@ -91,3 +93,42 @@ def poses_in_frame(rotations, translations, *, log_time_ns, frame_id="world"):
         raise InputError(f"got {len(quaternions)} rotations but {len(translations)} translations")
     return PosesInFrame(timestamp=timestamp(log_time_ns), frame_id=frame_id,
                         poses=_poses(translations, quaternions))
+
+
+def pose_in_frame(rotation, translation, *, log_time_ns, frame_id="world"):
+    """A ``foxglove.PoseInFrame`` of one rigid transform ``x -> R x + t``.
+
+    Parameters
+    ----------
+    rotation : array-like of shape (3, 3)
+    translation : array-like of shape (3,)
+    log_time_ns : int
+        Message timestamp in nanoseconds.
+    frame_id : str, default="world"
+
+    Returns
+    -------
+    message : foxglove_schemas_protobuf.PoseInFrame_pb2.PoseInFrame
+    """
+    (pose,) = poses_in_frame([rotation], [translation], log_time_ns=log_time_ns).poses
+    return PoseInFrame(timestamp=timestamp(log_time_ns), frame_id=frame_id, pose=pose)
+
+
+def frame_transform(rotation, translation, *, log_time_ns, parent_frame_id, child_frame_id):
+    """A ``foxglove.FrameTransform``: the pose ``x -> R x + t`` of frame ``child_frame_id`` in ``parent_frame_id``
+    (a point's child coordinates ``x`` to its parent coordinates), from ``log_time_ns`` on.
+
+    Parameters
+    ----------
+    rotation : array-like of shape (3, 3)
+    translation : array-like of shape (3,)
+    log_time_ns : int
+    parent_frame_id, child_frame_id : str
+
+    Returns
+    -------
+    message : foxglove_schemas_protobuf.FrameTransform_pb2.FrameTransform
+    """
+    pose = pose_in_frame(rotation, translation, log_time_ns=log_time_ns).pose
+    return FrameTransform(timestamp=timestamp(log_time_ns), parent_frame_id=parent_frame_id,
+                          child_frame_id=child_frame_id, translation=pose.position, rotation=pose.orientation)

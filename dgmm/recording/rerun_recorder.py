@@ -132,6 +132,17 @@ class RerunRecorder(Output):
             self._stream.set_time(timeline, sequence=iteration)
             self._stream.log(entity, archetype)
 
+    def set_timestamp(self, seconds, timeline="timestamp"):
+        """Put what is logged next also at ``seconds`` (since the Unix epoch, nanosecond resolution) of the
+        timestamp timeline ``timeline``: an input's own clock beside a sequence timeline.
+
+        Parameters
+        ----------
+        seconds : float
+        timeline : str, default="timestamp"
+        """
+        self._stream.set_time(timeline, timestamp=np.datetime64(int(round(float(seconds) * 1e9)), "ns"))
+
     def close(self):
         """Flush the recording and rename it into place."""
         self._stream.flush()

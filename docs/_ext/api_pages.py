@@ -18,6 +18,7 @@ MODULES = [
     "dgmm.model_io",  # Saving and loading fitted mixtures (.npz).
     "dgmm.odometry.synthetic",  # The synthetic TUM-format room sequence (imported on its own: trimesh).
     "dgmm.odometry.figure",  # Fig 6, the top-down trajectories (imported on its own: matplotlib).
+    "dgmm.odometry.ros2_mcap",  # ROS 2 recordings in MCAP as depth sequences (imported on its own: mcap).
 ]
 
 

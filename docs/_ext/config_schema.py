@@ -15,7 +15,11 @@ CONSTRAINTS = ("minimum", "maximum", "exclusiveMinimum", "minItems", "maxItems",
 
 
 def _type(schema):
-    """A short type label: ``integer``, ``list of integer``, ``one of a, b``, ``mapping``."""
+    """A short type label: ``integer``, ``list of integer``, ``one of a, b``, ``mapping``, ``string or mapping of
+    a, b`` (a list item of either form)."""
+    if "oneOf" in schema:
+        return " or ".join(f"mapping of {', '.join(option['properties'])}" if "properties" in option else _type(option)
+                           for option in schema["oneOf"])
     if "enum" in schema:
         return "one of " + ", ".join(f"``{value}``" for value in schema["enum"])
     kind = schema.get("type", "any")

@@ -164,20 +164,40 @@ def registration_mixture(wildcards):
 # Visual odometry
 
 
+def odometry_source(entry):
+    """``(name, source)`` of a configured sequence: a TUM folder's name, a recording's file stem or bag folder name;
+    the source is what ``dgmm.odometry.open_sequence`` reads (``path``, and a recording's topics and ground truth),
+    with its ``intrinsics`` when configured. Relative paths are from the repository root."""
+    if entry == "synthetic":
+        return "synthetic", {
+            "path": SYNTHETIC_SEQUENCE,
+            "groundtruth": f"{SYNTHETIC_SEQUENCE}/groundtruth.txt",
+            "intrinsics": "fr3",
+        }
+    if isinstance(entry, str):
+        entry = {"path": entry}
+    source = {**entry, "path": data_dir(entry["path"])}
+    path = source["path"].rstrip(os.sep)
+    name = os.path.splitext(os.path.basename(path))[0] if path.endswith(".mcap") else os.path.basename(path)
+    if "groundtruth" in entry:
+        source["groundtruth"] = data_dir(entry["groundtruth"])
+    elif "depth_topic" not in entry:  # a TUM folder's own ground truth, read by the job from the folder
+        truth = os.path.join(path, "groundtruth.txt")
+        source["groundtruth"] = truth if os.path.isfile(truth) else None
+    return name, {"groundtruth": None, "intrinsics": ODO["intrinsics"].get(name), **source}
+
+
 def odometry_sequences():
-    """The configured sequences: ``{name: folder}`` of those to run (real folders first, then the synthetic one),
-    and ``{name: configured path}`` of the real folders that are missing (the report says they are pending)."""
+    """The configured sequences: ``{name: source}`` of those to run (real ones first, then the synthetic one; see
+    ``odometry_source``), and ``{name: configured path}`` of the real ones that are missing (the report says they are
+    pending)."""
     present, missing = {}, {}
-    for entry in ODO["sequences"]:
-        if entry != "synthetic":
-            folder = data_dir(entry)
-            name = os.path.basename(folder.rstrip(os.sep))
-            if os.path.isdir(folder):
-                present[name] = folder
-            else:
-                missing[name] = entry
-    if "synthetic" in ODO["sequences"]:
-        present["synthetic"] = SYNTHETIC_SEQUENCE
+    for entry in sorted(ODO["sequences"], key=lambda entry: entry == "synthetic"):
+        name, source = odometry_source(entry)
+        if entry == "synthetic" or os.path.exists(source["path"]):
+            present[name] = source
+        else:
+            missing[name] = entry if isinstance(entry, str) else entry["path"]
     return present, missing
 
 
@@ -190,18 +210,36 @@ def odometry_outputs(name):
     return [f"{ODO_DIR}/{sequence}/{run}/{name}" for sequence in ODO_SEQUENCES for run in ODO_RUNS]
 
 
-def odometry_folder(wildcards):
-    """The sequence folder of an odometry job."""
-    return ODO_SEQUENCES[wildcards.sequence]
+def odometry_inputs(wildcards):
+    """The sequence (a TUM folder, a recording file or bag folder) of an odometry job, and its ground-truth file
+    when it is one of its own (a recording's)."""
+    source = ODO_SEQUENCES[wildcards.sequence]
+    truth = source["groundtruth"]
+    return {"sequence": source["path"], **({"groundtruth": truth} if "depth_topic" in source and truth else {})}
+
+
+def odometry_figure_inputs():
+    """What Fig 6 reads besides the trajectories: every sequence (a folder's ground truth is read from it) and
+    the recordings' ground-truth files."""
+    return [source["path"] for source in ODO_SEQUENCES.values()] + [
+        source["groundtruth"] for source in ODO_SEQUENCES.values() if "depth_topic" in source and source["groundtruth"]
+    ]
 
 
 def odometry_run_params(wildcards):
-    """Method, EM variant and intrinsics of an odometry job: the intrinsics from ``odometry.intrinsics`` or the
-    folder's name (the synthetic sequence is rendered with freiburg 3's)."""
+    """Method, EM variant and intrinsics of an odometry job, and what it opens the sequence with: the intrinsics
+    from ``odometry.intrinsics``, a recording's own entry or, for a TUM folder, its name (the synthetic sequence is
+    rendered with freiburg 3's; a recording without them has its camera info)."""
     method, variant = ODO_RUNS[wildcards.run]
-    name = wildcards.sequence
-    camera = ODO["intrinsics"].get(name) or ("fr3" if name == "synthetic" else sequence_intrinsics(name))
-    return {"method": method, "variant": variant or "textbook", "intrinsics": camera}
+    source = ODO_SEQUENCES[wildcards.sequence]
+    camera = source["intrinsics"] or (None if "depth_topic" in source else sequence_intrinsics(wildcards.sequence))
+    return {
+        "method": method,
+        "variant": variant or "textbook",
+        "intrinsics": camera,
+        "depth_topic": source.get("depth_topic"),
+        "camera_info_topic": source.get("camera_info_topic"),
+    }
 
 
 # Checks

@@ -1,11 +1,11 @@
 # Visual odometry (paper §VI-D "Visual Odometry", Fig 6): frame-to-frame odometry of the first odometry.frames depth
-# frames of every configured TUM RGB-D sequence that exists (odometry.sequences; missing ones are reported pending)
-# and of the synthetic one (rendered once from the seed into results/odometry/synthetic/sequence/), one job per
+# frames of every configured sequence that exists (odometry.sequences: TUM RGB-D folders and ROS 2 recordings; missing
+# ones are reported pending) and of the synthetic one (rendered once from the seed into results/odometry/synthetic/sequence/), one job per
 # (sequence, run): a run is a GMM method with an EM variant (gmm-pixels-textbook, gmm-pixels-authors; the plain-point
 # GMM runs textbook EM only, the same algorithm as the authors' on unit sizes: gmm-points-textbook) or icp.
-# Under results/odometry/{sequence}/{run}/ ({sequence}: the folder's name, or "synthetic"):
+# Under results/odometry/{sequence}/{run}/ ({sequence}: the folder's name, a recording's file stem, or "synthetic"):
 #   trajectory.txt   the estimated trajectory, TUM format (camera -> first camera)
-#   ate.csv          ATE RMSE and the one-second RPE against the ground truth, and the frame count (deterministic)
+#   ate.csv          ATE RMSE and the one-second RPE against the ground truth (empty without one), and the frame count
 #   seconds.csv      each frame's model and registration time, and CPU time (kept apart: ate.csv is byte-identical)
 #   odometry.mcap    per-frame timings, the estimated and ground-truth trajectories (foxglove.PosesInFrame)
 #   odometry.rrd     the camera path and each frame's mixture (or ICP points) on the timeline `frame`
@@ -39,7 +39,7 @@ rule odometry_synthetic:
 
 rule odometry_run:
     input:
-        sequence=odometry_folder,
+        unpack(odometry_inputs),
     output:
         trajectory=f"{ODO_JOB}/trajectory.txt",
         ate=f"{ODO_JOB}/ate.csv",
@@ -92,7 +92,7 @@ rule odometry_table:
 
 rule odometry_figure:
     input:
-        sequences=list(ODO_SEQUENCES.values()),
+        sequences=odometry_figure_inputs(),
         trajectories=odometry_outputs("trajectory.txt"),
     output:
         png=report(f"{ODO_DIR}/fig6.png", caption="../report/odometry_fig6.rst", category="Figures"),
@@ -103,6 +103,7 @@ rule odometry_figure:
     threads: 1
     params:
         sequences=list(ODO_SEQUENCES),
+        groundtruth=[source["groundtruth"] for source in ODO_SEQUENCES.values()],
         runs=list(ODO_RUNS),
         plane=ODO["plane"],
     script:

@@ -9,21 +9,21 @@ import sys
 from threadpoolctl import threadpool_limits
 
 from dgmm.experiments.sweep import job_seed
-from dgmm.odometry import first_frames, frame_seconds, run_odometry
+from dgmm.odometry import first_frames, frame_seconds, open_sequence, run_odometry
 from dgmm.odometry.metrics import drift_metrics
-from dgmm.odometry.pixels import parse_intrinsics
-from dgmm.odometry.tum import read_sequence, write_trajectory
+from dgmm.odometry.tum import write_trajectory
 from dgmm.recording import OdometryRecorder
 from dgmm.runtime.tables import write_csv
 
 smk = snakemake  # noqa: F821 (injected by Snakemake)
 sys.stderr = open(smk.log[0], "w")
 w, p, out = smk.wildcards, smk.params, smk.output
-method, variant, camera = p.run["method"], p.run["variant"], p.run["intrinsics"]
-sequence = read_sequence(smk.input.sequence)
-frames, groundtruth = first_frames(sequence, p.frames)
+method, variant = p.run["method"], p.run["variant"]
+sequence = open_sequence(smk.input.sequence, p.run["depth_topic"], p.run["camera_info_topic"],
+                         getattr(smk.input, "groundtruth", None))
+camera, intrinsics = sequence.camera(p.run["intrinsics"])
+frames, groundtruth = first_frames(sequence, p.frames, require_groundtruth=False)
 seed = job_seed(p.seed, f"odometry/{w.sequence}/{w.run}", 0)
-intrinsics = parse_intrinsics(camera)
 options = dict(intrinsics=intrinsics, n_components=p.components, schedule=p.schedule, warm_iter=p.warm_iter or None,
                variant=variant, size=p.pixel_size, n_icp_points=p.icp_points, seed=seed)
 params = dict(sequence=w.sequence, folder=str(smk.input.sequence), method=method, variant=variant,
@@ -31,10 +31,11 @@ params = dict(sequence=w.sequence, folder=str(smk.input.sequence), method=method
               warm_iter=p.warm_iter, size=p.pixel_size, n_icp_points=p.icp_points, seed=seed, root_seed=p.seed)
 
 with threadpool_limits(smk.threads), OdometryRecorder(out.mcap, out.rrd, params=params, groundtruth=groundtruth,
-                                                      intrinsics=intrinsics) as recorder:
+                                                      intrinsics=intrinsics,
+                                                      camera_frame=sequence.camera_frame) as recorder:
     result = run_odometry(sequence, method, frames, callback=recorder, **options)
     recorder.finish(result.trajectory)
-metrics = drift_metrics(result.trajectory, sequence.groundtruth)
+metrics = drift_metrics(result.trajectory, sequence.groundtruth)  # all None without ground truth
 write_trajectory(out.trajectory, result.trajectory, header=f"dgmm {w.run} odometry of {w.sequence}, seed {seed}")
 job = dict(sequence=w.sequence, method=method, variant=variant if method != "icp" else "")
 metrics = {key: "" if value is None else value for key, value in metrics.items()}
