@@ -162,15 +162,15 @@ TIMING_SWEEP = {
     ),
     **{
         check: (
-            {"sequence": ODO_SEQUENCES[name]},
+            {"sequence": ODO_SEQUENCES[name]["path"]},
             dict(
                 TIMING_ODOMETRY,
                 name=name,
-                intrinsics=ODO["intrinsics"].get(name) or ("fr3" if name == "synthetic" else sequence_intrinsics(name)),
+                intrinsics=ODO_SEQUENCES[name]["intrinsics"] or sequence_intrinsics(name),
             ),
         )
         for check, name in ((check, options.get("sequence")) for check, options in TIMING.items())
-        if name in ODO_SEQUENCES
+        if name in ODO_SEQUENCES and "depth_topic" not in ODO_SEQUENCES[name]  # TUM folders (read_sequence)
     },
 }
 TIMING_SETUPS = {
