@@ -15,7 +15,7 @@ import numpy as np
 
 from dgmm.experiments.checks.interleaved import interleaved_times
 from dgmm.experiments.sweep import job_seed
-from dgmm.odometry import METHODS, SCHEDULES, odometry_runs, parse_intrinsics
+from dgmm.odometry import METHODS, SCHEDULES, groundtruth_at_frames, odometry_runs, parse_intrinsics
 from dgmm.registration import register_d2d, rotation_distance_deg
 
 VARIANT = "textbook"
@@ -52,7 +52,7 @@ class SweepFrames:
                         "variant": VARIANT, "size": pixel_size, "n_icp_points": icp_points, "icp_tol": ICP_TOL,
                         "intrinsics": self.intrinsics}
         self.previous = dict.fromkeys(methods)
-        matched, poses = sequence.groundtruth_at_frames()
+        matched, poses = groundtruth_at_frames(sequence)
         self.truth = dict(zip(matched.tolist(), poses.rotations))
 
     def model(self, method, index, depth):
