@@ -8,7 +8,7 @@ import re
 
 from dgmm.experiments.report import claims
 from dgmm.experiments.report.claims import grading
-from dgmm.experiments.report.claims.rules import NOTEBOOK, SECTION_TITLES, TEXT, WORDS, first_section
+from dgmm.experiments.report.claims.rules import NOTEBOOK, TEXT, WORDS, first_section
 from dgmm.experiments.report.document import BADGE_MARKS
 
 

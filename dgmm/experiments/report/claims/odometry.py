@@ -12,8 +12,9 @@ import numpy as np
 
 from dgmm.experiments.report import paper
 from dgmm.experiments.report.claims.grading import PLAIN, Estimate, compare, estimate, grade_share, versus_paper
-from dgmm.experiments.report.claims.rules import (SIMILAR_TIME, TEXT, VARIANT_NAMES, WORDS, Cause, Claim, beside,
-                                                  graded_share, missing, pending, per_variant, timing_claim)
+from dgmm.experiments.report.claims.rules import (SIMILAR_TIME, TEXT, VARIANT_NAMES, WORDS, Cause, Claim, graded_share,
+                                                  missing, pending, per_variant)
+from dgmm.experiments.report.claims.timings import beside, timing_claim
 from dgmm.odometry.frame_model import UNSIZED_METHODS
 
 PAPER_SEQUENCE = "rgbd_dataset_freiburg3_long_office_household"

@@ -15,10 +15,10 @@ from dgmm.experiments.report import paper
 from dgmm.experiments.report.claims.grading import (BAND_ERRORS, EVERY, LOSS, PLAIN, TIE, WIN, Estimate, TimeRatio,
                                                     bootstrap, compare, estimate, grade_share, grade_time,
                                                     paired_difference, versus_paper, within)
-from dgmm.experiments.report.claims.rules import (ERROR_NAMES, MIN_REPEATS, NOTEBOOK, SIMILAR_TIME, TEXT, VARIANTS,
-                                                  WORDS, WRONG_MINIMUM_DEG, Cause, Claim, beside, conjoined, em,
-                                                  graded_share, missing, pending, per_variant, same, sentence,
-                                                  timing_claim, unwon, wrong_minima)
+from dgmm.experiments.report.claims.rules import (ERROR_NAMES, NOTEBOOK, SIMILAR_TIME, TEXT, VARIANTS, WORDS,
+                                                  WRONG_MINIMUM_DEG, Cause, Claim, conjoined, em, graded_share, missing,
+                                                  pending, per_variant, same, sentence, unwon, wrong_minima)
+from dgmm.experiments.report.claims.timings import MIN_REPEATS, beside, timing_claim
 from dgmm.experiments.report.tables import FIG5_MESH
 
 FIG5_METHODS = ("mesh-kmeans", "mesh-random", "points-kmeans", "points-random", "icp", "cpd")

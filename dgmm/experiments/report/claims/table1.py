@@ -9,8 +9,8 @@ import numpy as np
 from dgmm.experiments.report import paper
 from dgmm.experiments.report.claims.grading import (EVERY, LOSS, OFTEN_WORDS, PLAIN, TIE, WIN, bootstrap, compare,
                                                     paired_difference, versus_paper)
-from dgmm.experiments.report.claims.rules import (ERROR_NAMES, TEXT, WORDS, WRONG_MINIMUM_DEG, Cause, Claim,
-                                                  conjoined, fitted_variant, graded_share, missing, per_variant, unwon,
+from dgmm.experiments.report.claims.rules import (ERROR_NAMES, TEXT, WORDS, WRONG_MINIMUM_DEG, Cause, Claim, conjoined,
+                                                  fitted_variant, graded_share, missing, per_variant, unwon,
                                                   wrong_minima)
 from dgmm.experiments.report.tables import FIG5_MESH, TABLE1_FIT, TABLE1_INPUTS, TABLE1_METHODS, table1_mesh
 

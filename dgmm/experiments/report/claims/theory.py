@@ -5,7 +5,8 @@ from dataclasses import replace
 import numpy as np
 
 from dgmm.experiments.report.claims.grading import BAND_ERRORS, EVERY, estimate, grade_share, within
-from dgmm.experiments.report.claims.rules import VARIANT_NAMES, WORDS, Cause, Claim, pending, same, timing_claim
+from dgmm.experiments.report.claims.rules import VARIANT_NAMES, WORDS, Cause, Claim, pending, same
+from dgmm.experiments.report.claims.timings import timing_claim
 from dgmm.experiments.report.tables import fig2_bars
 from dgmm.experiments.shared_responsibility import PER_POINT_MEASURE
 
