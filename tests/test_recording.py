@@ -314,8 +314,12 @@ def test_ctrl_c_while_rerun_builds_its_stream_is_held_until_the_stream_exists(tm
     monkeypatch.setattr(rerun.RecordingStream, "__init__", interrupted)
     unraisable = []
     monkeypatch.setattr(sys, "unraisablehook", unraisable.append)
-    with pytest.raises(KeyboardInterrupt):
-        FitRecorder(tmp_path / "out.mcap", tmp_path / "out.rrd")
+    inherited = signal.signal(signal.SIGINT, signal.default_int_handler)  # a suite started with `&` ignores SIGINT
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            FitRecorder(tmp_path / "out.mcap", tmp_path / "out.rrd")
+    finally:
+        signal.signal(signal.SIGINT, inherited)
     gc.collect()
     assert unraisable == [] and list(tmp_path.iterdir()) == []
 
