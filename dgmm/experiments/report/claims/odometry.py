@@ -45,20 +45,14 @@ def _estimate(values):
     return estimate(values) if len(values) > 1 else Estimate(values[0], ATE_SEED_SPREAD * values[0])
 
 
-def _seeded(rows):
-    """Whether odometry.csv holds more than one seed of a run."""
-    return len({row["seed"] for row in rows or [] if row.get("seed", "") != ""}) > 1
-
-
-def _spread(rows):
-    """What a run's standard error is, in words."""
-    return (f"a run's error the spread of its {len({row['seed'] for row in rows})} seeds" if _seeded(rows) else
-            f"{ATE_SEED_SPREAD:.1%}, fr1/xyz")
+def _seed_count(rows):
+    """How many seeds of a run odometry.csv holds (0 without a ``seed`` column)."""
+    return len({row["seed"] for row in rows or [] if row.get("seed", "") != ""})
 
 
 def _seeds(rows):
     """What the tie band of an ATE comparison rests on, for the evidence."""
-    return (f"band: 2 standard errors over {len({row['seed'] for row in rows})} seeds" if _seeded(rows) else
+    return (f"band: 2 standard errors over {_seed_count(rows)} seeds" if _seed_count(rows) > 1 else
             f"one seed per run, band: 2 standard errors, a run's error {ATE_SEED_SPREAD:.1%} of its ATE (the seed "
             "spread measured on fr1/xyz, docs/studies/odometry_drift.md)")
 
@@ -85,15 +79,15 @@ def _pixel_cause(rows, comparisons, variant):
     points', for the evidence."""
     improvement = paper.FIG6_ATE_M["gmm-points"] / paper.FIG6_ATE_M["gmm-pixels"] - 1
     lost = [c.label for c in comparisons if c.outcome == "lost"]
-    runs = {variant: _ates(rows, variant) for variant in VARIANT_NAMES}
+    runs = {em_name: _ates(rows, em_name) for em_name in VARIANT_NAMES}
     sequences = [s for s in runs["textbook"]
                  if all({"gmm-pixels", "gmm-points"} <= runs[v].get(s, {}).keys() for v in runs)]
     between = [abs((runs["authors"][s]["gmm-pixels"] - runs["textbook"][s]["gmm-pixels"]).value) for s in sequences]
     effect = [abs((r[s]["gmm-pixels"] - r[s]["gmm-points"]).value) for r in runs.values() for s in sequences]
     detail = (f"the two EMs' pixel runs lie {_span(between)} apart, pixels and points {_span(effect)}"
               if sequences else "")
-    tied = (f"The paper's {improvement:.1%} is inside a run's seed spread ({_spread(rows)})"
-            if not _seeded(rows) else "The differences are inside the seeds' spread")
+    tied = (f"The paper's {improvement:.1%} is inside a run's seed spread ({ATE_SEED_SPREAD:.1%}, fr1/xyz)"
+            if _seed_count(rows) < 2 else "The differences are inside the seeds' spread")
     if lost and variant == "textbook" and not _lost(rows, "authors", lost):
         return Cause(tied + f"; {', '.join(lost)} lost under textbook EM alone: its area weights (∝ Z²) favour the "
                      "far surfaces (odometry docs).", detail)
