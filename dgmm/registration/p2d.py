@@ -85,8 +85,17 @@ def p2d_cost(params, points, centre, mixture, with_grad):
     return cost, np.concatenate([grad_moved.sum(axis=0), grad_quaternion])
 
 
-def p2d_pose_cost(points, centre, mixture):
+def p2d_pose_cost(points, centre, mixture, compiled=True):
     """The P2D cost as :func:`~dgmm.registration.solvers.minimise_gauss_newton` evaluates it.
+
+    Parameters
+    ----------
+    points : ndarray of shape (n_points, 3)
+    centre : ndarray of shape (3,)
+    mixture : FittedMixture
+    compiled : bool, default=True
+        The numba kernels of :mod:`~dgmm.registration.p2d_compiled` (the pairs within its screen), or the numpy
+        functions above (every pair; the reference in tests).
 
     Returns
     -------
@@ -95,8 +104,12 @@ def p2d_pose_cost(points, centre, mixture):
         ``derivatives()`` gives the gradient (6,), the Gauss-Newton matrix (6, 6) and the exact Hessian (6, 6)
         over ``(δ, ω)``.
     """
-    local = points - centre
-    n_points = len(points)
+    return (_compiled_pose_cost if compiled else _numpy_pose_cost)(points - centre, centre, mixture)
+
+
+def _numpy_pose_cost(local, centre, mixture):
+    """:func:`p2d_pose_cost` in numpy."""
+    n_points = len(local)
 
     def evaluate(rotation, translation):
         rotated = local @ rotation.T
@@ -113,6 +126,22 @@ def p2d_pose_cost(points, centre, mixture):
             return pose_gradient, gauss_newton, exact
 
         return cost, derivatives
+
+    return evaluate
+
+
+def _compiled_pose_cost(local, centre, mixture):
+    """:func:`p2d_pose_cost` with the numba kernels."""
+    from dgmm.registration import p2d_compiled  # numba loads only where Gauss-Newton P2D runs
+
+    table, precisions = mixture.log_density_table, mixture.precisions
+    precision_means = np.ascontiguousarray(mixture.moment_table[:, 9:])
+
+    def evaluate(rotation, translation):
+        rotated = local @ rotation.T
+        offsets = rotated + (centre + translation - mixture.origin)
+        return (p2d_compiled.negative_mean_log_likelihood(offsets, table),
+                partial(p2d_compiled.pose_derivatives, offsets, rotated, table, precisions, precision_means))
 
     return evaluate
 

@@ -1,0 +1,158 @@
+"""The P2D cost and its derivatives compiled with numba, over the point-component pairs that can matter.
+
+The Gauss-Newton solver's P2D (:func:`dgmm.registration.p2d.p2d_pose_cost`) spends its time in the likelihood of
+every trial pose: ``n_points x n_components`` exponentials. A point's responsibility ``e^{l_nk - max_k l_nk}``
+under a component more than :data:`SCREEN` nats below its best adds less than half a unit in the last place to
+the point's sum (which is at least 1), so these kernels compute every log-density (10 multiply-adds) but the
+exponential and the moments only of the pairs within :data:`SCREEN`. The numpy functions of
+:mod:`~dgmm.registration.p2d` stay the reference (``p2d_pose_cost(compiled=False)``, tested against these).
+numba's on-disk cache (``cache=True``) keeps the compiled code beside this file: only a machine's first run
+compiles.
+"""
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+SCREEN = 50.0
+"""Pairs with ``l_nk < max_k l_nk - SCREEN`` are left out: ``e^-50 ~ 2e-22``, so even 10⁵ of them add under
+``2e-17`` to a sum of at least 1, below half its last place (``1.1e-16``)."""
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _log_densities(offset, table, out):
+    """``quadratic_features(offset) @ table`` for one offset (3,) into ``out`` (n_components,); returns its max."""
+    x, y, z = offset[0], offset[1], offset[2]
+    xx, yy, zz, xy, xz, yz = x * x, y * y, z * z, x * y, x * z, y * z
+    for k in range(out.shape[0]):  # one expression per component: the loop vectorises
+        out[k] = (xx * table[0, k] + yy * table[1, k] + zz * table[2, k] + xy * table[3, k] + xz * table[4, k]
+                  + yz * table[5, k] + x * table[6, k] + y * table[7, k] + z * table[8, k] + table[9, k])
+    top = -np.inf
+    for k in range(out.shape[0]):
+        top = max(top, out[k])
+    return top
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _screened_terms(offset, table, log_density, active, terms):
+    """The components within :data:`SCREEN` of an offset's best: their indices into ``active`` and their
+    ``e^{l_k - max l}`` into ``terms`` (buffers of n_components); returns ``(max l, count, Σ terms)``."""
+    top = _log_densities(offset, table, log_density)
+    count, total = 0, 0.0
+    for k in range(log_density.shape[0]):
+        if log_density[k] > top - SCREEN:
+            active[count] = k
+            terms[count] = math.exp(log_density[k] - top)
+            total += terms[count]
+            count += 1
+    return top, count, total
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def negative_mean_log_likelihood(offsets, table):
+    """``-1/n Σ_n log Σ_k π_k N(y_n | μ_k, Σ_k)`` from the offsets ``y_n - origin`` (n_points, 3) and
+    :attr:`~dgmm.registration.fitted.FittedMixture.log_density_table` (10, n_components)."""
+    n_components = table.shape[1]
+    log_density, terms = np.empty(n_components), np.empty(n_components)
+    active = np.empty(n_components, dtype=np.int64)
+    total = 0.0
+    for n in range(offsets.shape[0]):
+        top, _, sum_ = _screened_terms(offsets[n], table, log_density, active, terms)
+        total += math.log(sum_) + top
+    return -total / offsets.shape[0]
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def pose_derivatives(offsets, rotated, table, precisions, precision_means):
+    """Gradient, Gauss-Newton matrix and exact Hessian over ``(δ, ω)`` of the cost at the pose of ``offsets``
+    (what :func:`~dgmm.registration.p2d.p2d_pose_cost`'s ``derivatives()`` returns).
+
+    Parameters
+    ----------
+    offsets : ndarray of shape (n_points, 3)
+        ``y_n - origin``.
+    rotated : ndarray of shape (n_points, 3)
+        ``p_n = R (x_n - c)``: ``dy_n = δ - [p_n]x ω``.
+    table : ndarray of shape (10, n_components)
+        The log-density table.
+    precisions : ndarray of shape (n_components, 3, 3)
+        ``P_k``.
+    precision_means : ndarray of shape (n_components, 3)
+        ``P_k (μ_k - origin)``.
+
+    Returns
+    -------
+    gradient : ndarray of shape (6,)
+    gauss_newton : ndarray of shape (6, 6)
+        ``1/n Σ_n J_nᵀ W_n J_n``, ``W_n = Σ_k r_nk P_k`` and ``J_n = [I, -[p_n]x]``.
+    exact : ndarray of shape (6, 6)
+        The same with the exact Hessian of ``-log p(y_n)``, ``W_n - (Σ_k r_nk g_nk g_nkᵀ - ḡ_n ḡ_nᵀ)``, plus the
+        rotation's second-order term ``Σ_n sym(ḡ_n p_nᵀ) - (ḡ_n·p_n) I`` (``g_nk = P_k (y_n - μ_k)``).
+    """
+    n_points, n_components = offsets.shape[0], table.shape[1]
+    gradient = np.zeros(6)
+    gauss_newton = np.zeros((6, 6))
+    exact = np.zeros((6, 6))
+    outer = np.zeros((3, 3))
+    log_density, terms = np.empty(n_components), np.empty(n_components)
+    active = np.empty(n_components, dtype=np.int64)
+    weight, spread, hessian = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
+    g, mean_g = np.empty(3), np.empty(3)
+    skew = np.zeros((3, 3))
+    for n in range(n_points):
+        d = offsets[n]
+        _, count, sum_ = _screened_terms(d, table, log_density, active, terms)
+        weight[:] = 0.0
+        spread[:] = 0.0
+        mean_g[:] = 0.0
+        for i in range(count):
+            k, r = active[i], terms[i] / sum_
+            for a in range(3):
+                g[a] = (precisions[k, a, 0] * d[0] + precisions[k, a, 1] * d[1] + precisions[k, a, 2] * d[2]
+                        - precision_means[k, a])
+                mean_g[a] += r * g[a]
+            for a in range(3):
+                for b in range(3):
+                    weight[a, b] += r * precisions[k, a, b]
+                    spread[a, b] += r * g[a] * g[b]
+        for a in range(3):
+            for b in range(3):
+                hessian[a, b] = weight[a, b] - spread[a, b] + mean_g[a] * mean_g[b]
+                outer[a, b] += mean_g[a] * rotated[n, b]
+        _add_pose_terms(rotated[n], mean_g, weight, hessian, skew, gradient, gauss_newton, exact)
+    gradient /= n_points
+    gauss_newton /= n_points
+    exact /= n_points
+    outer /= n_points
+    trace = outer[0, 0] + outer[1, 1] + outer[2, 2]
+    for a in range(3):
+        for b in range(3):
+            exact[3 + a, 3 + b] += 0.5 * (outer[a, b] + outer[b, a]) - (trace if a == b else 0.0)
+    return gradient, gauss_newton, exact
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _add_pose_terms(p, g, weight, hessian, skew, gradient, gauss_newton, exact):
+    """Add one point's ``J_nᵀ ḡ_n``, ``J_nᵀ W_n J_n`` and ``J_nᵀ H_n J_n``, ``J_n = [I, -[p]x]``, to the sums
+    (the (δ, ω) and (ω, δ) blocks: ``-W [p]x`` and its transpose; the (ω, ω) block: ``[p]xᵀ W [p]x``)."""
+    skew[0, 1], skew[0, 2], skew[1, 2] = -p[2], p[1], -p[0]
+    skew[1, 0], skew[2, 0], skew[2, 1] = p[2], -p[1], p[0]
+    for a in range(3):
+        gradient[a] += g[a]
+        gradient[3 + a] += p[(a + 1) % 3] * g[(a + 2) % 3] - p[(a + 2) % 3] * g[(a + 1) % 3]  # p x g
+    for matrix, out in ((weight, gauss_newton), (hessian, exact)):
+        for a in range(3):
+            for b in range(3):
+                out[a, b] += matrix[a, b]
+                cross = matrix[a, 0] * skew[0, b] + matrix[a, 1] * skew[1, b] + matrix[a, 2] * skew[2, b]
+                out[a, 3 + b] -= cross
+                out[3 + b, a] -= cross
+        for a in range(3):
+            for b in range(3):
+                total = 0.0
+                for c in range(3):
+                    total += skew[c, a] * (matrix[c, 0] * skew[0, b] + matrix[c, 1] * skew[1, b]
+                                           + matrix[c, 2] * skew[2, b])
+                out[3 + a, 3 + b] += total

@@ -1,0 +1,88 @@
+"""The compiled P2D kernels (dgmm.registration.p2d_compiled) against the numpy reference (every pair, numpy's exp):
+costs, derivatives and Gauss-Newton poses; the central-difference tests of test_registration.py check the compiled
+derivatives on their own."""
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+from sklearn.mixture import GaussianMixture
+
+from dgmm import registration as reg
+from dgmm.registration import p2d, p2d_compiled
+from dgmm.registration.fitted import FittedMixture, quadratic_features
+from dgmm.registration.p2d import p2d_pose_cost
+
+
+def _both(points, mixture):
+    centre = points.mean(axis=0)
+    return p2d_pose_cost(points, centre, mixture), p2d_pose_cost(points, centre, mixture, compiled=False)
+
+
+def _assert_same_terms(compiled, reference, rotation, translation):
+    cost, derivatives = compiled(rotation, translation)
+    expected_cost, expected = reference(rotation, translation)
+    assert cost == pytest.approx(expected_cost, rel=1e-13)
+    for ours, theirs, name in zip(derivatives(), expected(), ("gradient", "Gauss-Newton", "exact Hessian")):
+        np.testing.assert_allclose(ours, theirs, rtol=0, atol=1e-11 * np.abs(theirs).max(), err_msg=name)
+
+
+@pytest.fixture(scope="module")
+def bunny_mixture(bunny_res4):
+    vertices = np.asarray(bunny_res4.vertices)
+    fitted = GaussianMixture(100, init_params="kmeans", tol=1e-5, max_iter=100, random_state=0).fit(vertices)
+    return vertices, FittedMixture.from_fitted("bunny", fitted)
+
+
+def _mixture(means, covariances, weights):
+    """A fitted-mixture-like object, precisions_cholesky_ as scikit-learn builds it."""
+    return SimpleNamespace(weights_=weights, means_=means, covariances_=covariances,
+                           precisions_cholesky_=np.linalg.inv(np.linalg.cholesky(covariances)).transpose(0, 2, 1))
+
+
+def test_bunny_terms_equal_the_numpy_reference_at_random_poses(bunny_mixture):
+    """K=100 on the bunny, where most pairs lie beyond the screen: it is tested as well as the arithmetic."""
+    vertices, mixture = bunny_mixture
+    log_density = quadratic_features(vertices - mixture.origin) @ mixture.log_density_table
+    assert np.mean(log_density < log_density.max(axis=1, keepdims=True) - p2d_compiled.SCREEN) > 0.5
+    compiled, reference = _both(vertices, mixture)
+    rng = np.random.default_rng(0)
+    for angle in (0.0, 5.0, 15.0):
+        axis = rng.normal(size=3)
+        rotation = Rotation.from_rotvec(np.radians(angle) * axis / np.linalg.norm(axis)).as_matrix()
+        _assert_same_terms(compiled, reference, rotation, 0.003 * rng.normal(size=3))
+
+
+def test_components_far_beyond_the_screen_change_nothing():
+    """A mixture and a copy of it 100 standard deviations away, half the weight each: every pair of the copy is
+    screened out, and the cost is the mixture's alone plus log 2, its derivatives the mixture's."""
+    rng = np.random.default_rng(1)
+    means = rng.normal(size=(8, 3))
+    covariances = np.repeat(0.05 * np.eye(3)[None], 8, axis=0)
+    points = means[rng.integers(8, size=200)] + 0.2 * rng.normal(size=(200, 3))
+    near = FittedMixture.from_fitted("near", _mixture(means, covariances, np.full(8, 1 / 8)))
+    both = FittedMixture.from_fitted("both", _mixture(np.concatenate([means, means + 100 * np.sqrt(0.05)]),
+                                                      np.concatenate([covariances, covariances]), np.full(16, 1 / 16)))
+    centre = points.mean(axis=0)
+    near_cost, near_derivatives = p2d_pose_cost(points, centre, near)(np.eye(3), np.zeros(3))
+    cost, derivatives = p2d_pose_cost(points, centre, both)(np.eye(3), np.zeros(3))
+    assert cost == pytest.approx(near_cost + np.log(2.0), rel=1e-14)
+    for ours, theirs in zip(derivatives(), near_derivatives()):
+        np.testing.assert_allclose(ours, theirs, rtol=0, atol=1e-12 * np.abs(theirs).max())
+
+
+@pytest.mark.slow
+def test_gauss_newton_poses_equal_the_numpy_path(bunny_mixture, monkeypatch):
+    """The registrations of benchmarks/registration_speed.py's protocol (±15°, ±5% of the diagonal): the compiled
+    and the numpy costs end on the same poses to 1e-9 rad and 1e-9 of the diagonal."""
+    vertices, mixture = bunny_mixture
+    diagonal = float(np.linalg.norm(vertices.max(axis=0) - vertices.min(axis=0)))
+    trials = reg.random_trials(8, np.random.default_rng(2), diagonal, vertices.mean(axis=0))
+    compiled = [reg.register_p2d(trial.apply(vertices), mixture, solver="gauss-newton") for trial in trials]
+    original = p2d.p2d_pose_cost
+    monkeypatch.setattr(p2d, "p2d_pose_cost", lambda *args: original(*args, compiled=False))
+    for trial, ours in zip(trials, compiled):
+        theirs = reg.register_p2d(trial.apply(vertices), mixture, solver="gauss-newton")
+        assert np.radians(reg.rotation_distance_deg(ours.rotation, theirs.rotation)) < 1e-9
+        assert np.abs(ours.translation - theirs.translation).max() < 1e-9 * diagonal
+        assert ours.iterations == theirs.iterations
