@@ -135,13 +135,15 @@ def _compiled_pose_cost(local, centre, mixture):
     from dgmm.registration import p2d_compiled  # numba loads only where Gauss-Newton P2D runs
 
     table, precisions = mixture.log_density_table, mixture.precisions
+    resp_shape = (len(local), table.shape[1])
     precision_means = np.ascontiguousarray(mixture.moment_table[:, 9:])
 
     def evaluate(rotation, translation):
         rotated = local @ rotation.T
         offsets = rotated + (centre + translation - mixture.origin)
-        return (p2d_compiled.negative_mean_log_likelihood(offsets, table),
-                partial(p2d_compiled.pose_derivatives, offsets, rotated, table, precisions, precision_means))
+        pairs = p2d_compiled.screened_pairs(*resp_shape)
+        return (p2d_compiled.negative_mean_log_likelihood(offsets, table, *pairs),
+                partial(p2d_compiled.pose_derivatives, offsets, rotated, precisions, precision_means, *pairs))
 
     return evaluate
 

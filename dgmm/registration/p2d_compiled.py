@@ -35,39 +35,47 @@ def _log_densities(offset, table, out):
     return top
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
-def _screened_terms(offset, table, log_density, active, terms):
-    """The components within :data:`SCREEN` of an offset's best: their indices into ``active`` and their
-    ``e^{l_k - max l}`` into ``terms`` (buffers of n_components); returns ``(max l, count, Σ terms)``."""
-    top = _log_densities(offset, table, log_density)
-    count, total = 0, 0.0
-    for k in range(log_density.shape[0]):
-        if log_density[k] > top - SCREEN:
-            active[count] = k
-            terms[count] = math.exp(log_density[k] - top)
-            total += terms[count]
-            count += 1
-    return top, count, total
+def screened_pairs(n_points, n_components):
+    """Buffers for :func:`negative_mean_log_likelihood` to leave its screened pairs in, for
+    :func:`pose_derivatives` at the same pose: ``(starts (n_points + 1,), components, terms, sums (n_points,))``."""
+    size = n_points * n_components
+    return (np.empty(n_points + 1, dtype=np.int64), np.empty(size, dtype=np.int64), np.empty(size),
+            np.empty(n_points))
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def negative_mean_log_likelihood(offsets, table):
+def negative_mean_log_likelihood(offsets, table, starts, components, terms, sums):
     """``-1/n Σ_n log Σ_k π_k N(y_n | μ_k, Σ_k)`` from the offsets ``y_n - origin`` (n_points, 3) and
-    :attr:`~dgmm.registration.fitted.FittedMixture.log_density_table` (10, n_components)."""
-    n_components = table.shape[1]
-    log_density, terms = np.empty(n_components), np.empty(n_components)
-    active = np.empty(n_components, dtype=np.int64)
+    :attr:`~dgmm.registration.fitted.FittedMixture.log_density_table` (10, n_components).
+
+    Leaves the pairs within :data:`SCREEN` in the :func:`screened_pairs` buffers: point ``n``'s are
+    ``components[starts[n]:starts[n + 1]]``, with ``e^{l_nk - max_k l_nk}`` in ``terms`` and their sum in
+    ``sums[n]``.
+    """
+    log_density = np.empty(table.shape[1])
     total = 0.0
+    count = 0
     for n in range(offsets.shape[0]):
-        top, _, sum_ = _screened_terms(offsets[n], table, log_density, active, terms)
+        top = _log_densities(offsets[n], table, log_density)
+        starts[n] = count
+        sum_ = 0.0
+        for k in range(log_density.shape[0]):
+            if log_density[k] > top - SCREEN:
+                components[count] = k
+                terms[count] = math.exp(log_density[k] - top)
+                sum_ += terms[count]
+                count += 1
+        sums[n] = sum_
         total += math.log(sum_) + top
+    starts[offsets.shape[0]] = count
     return -total / offsets.shape[0]
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def pose_derivatives(offsets, rotated, table, precisions, precision_means):
+def pose_derivatives(offsets, rotated, precisions, precision_means, starts, components, terms, sums):
     """Gradient, Gauss-Newton matrix and exact Hessian over ``(δ, ω)`` of the cost at the pose of ``offsets``
-    (what :func:`~dgmm.registration.p2d.p2d_pose_cost`'s ``derivatives()`` returns).
+    (what :func:`~dgmm.registration.p2d.p2d_pose_cost`'s ``derivatives()`` returns), from the screened pairs
+    :func:`negative_mean_log_likelihood` left at that pose.
 
     Parameters
     ----------
@@ -75,12 +83,12 @@ def pose_derivatives(offsets, rotated, table, precisions, precision_means):
         ``y_n - origin``.
     rotated : ndarray of shape (n_points, 3)
         ``p_n = R (x_n - c)``: ``dy_n = δ - [p_n]x ω``.
-    table : ndarray of shape (10, n_components)
-        The log-density table.
     precisions : ndarray of shape (n_components, 3, 3)
         ``P_k``.
     precision_means : ndarray of shape (n_components, 3)
         ``P_k (μ_k - origin)``.
+    starts, components, terms, sums : ndarray
+        The screened pairs (:func:`screened_pairs`).
 
     Returns
     -------
@@ -91,24 +99,21 @@ def pose_derivatives(offsets, rotated, table, precisions, precision_means):
         The same with the exact Hessian of ``-log p(y_n)``, ``W_n - (Σ_k r_nk g_nk g_nkᵀ - ḡ_n ḡ_nᵀ)``, plus the
         rotation's second-order term ``Σ_n sym(ḡ_n p_nᵀ) - (ḡ_n·p_n) I`` (``g_nk = P_k (y_n - μ_k)``).
     """
-    n_points, n_components = offsets.shape[0], table.shape[1]
+    n_points = offsets.shape[0]
     gradient = np.zeros(6)
     gauss_newton = np.zeros((6, 6))
     exact = np.zeros((6, 6))
     outer = np.zeros((3, 3))
-    log_density, terms = np.empty(n_components), np.empty(n_components)
-    active = np.empty(n_components, dtype=np.int64)
     weight, spread, hessian = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
     g, mean_g = np.empty(3), np.empty(3)
     skew = np.zeros((3, 3))
     for n in range(n_points):
         d = offsets[n]
-        _, count, sum_ = _screened_terms(d, table, log_density, active, terms)
         weight[:] = 0.0
         spread[:] = 0.0
         mean_g[:] = 0.0
-        for i in range(count):
-            k, r = active[i], terms[i] / sum_
+        for i in range(starts[n], starts[n + 1]):
+            k, r = components[i], terms[i] / sums[n]
             for a in range(3):
                 g[a] = (precisions[k, a, 0] * d[0] + precisions[k, a, 1] * d[1] + precisions[k, a, 2] * d[2]
                         - precision_means[k, a])
