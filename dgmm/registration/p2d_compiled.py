@@ -58,13 +58,14 @@ def negative_mean_log_likelihood(offsets, table, starts, components, terms, sums
     for n in range(offsets.shape[0]):
         top = _log_densities(offsets[n], table, log_density)
         starts[n] = count
+        threshold = top - SCREEN
+        for k in range(log_density.shape[0]):  # branch-free: every index is written, the kept ones advance
+            components[count] = k
+            count += log_density[k] > threshold
         sum_ = 0.0
-        for k in range(log_density.shape[0]):
-            if log_density[k] > top - SCREEN:
-                components[count] = k
-                terms[count] = math.exp(log_density[k] - top)
-                sum_ += terms[count]
-                count += 1
+        for i in range(starts[n], count):
+            terms[i] = math.exp(log_density[components[i]] - top)
+            sum_ += terms[i]
         sums[n] = sum_
         total += math.log(sum_) + top
     starts[offsets.shape[0]] = count
