@@ -216,8 +216,15 @@ def d2d_cost(params, tables, with_grad):
     return pairs.cost, np.concatenate([gradient[:3], np.einsum("ab,jab->j", grad_rotation, jacobian)])
 
 
-def d2d_pose_cost(tables):
+def d2d_pose_cost(tables, compiled=True):
     """The D2D cost as :func:`~dgmm.registration.solvers.minimise_gauss_newton` evaluates it.
+
+    Parameters
+    ----------
+    tables : PairTables
+    compiled : bool, default=True
+        The numba kernels of :mod:`~dgmm.registration.d2d_compiled`, or the numpy functions above (the reference
+        in tests).
 
     Returns
     -------
@@ -225,10 +232,32 @@ def d2d_pose_cost(tables):
         ``evaluate(rotation, translation) -> (cost, derivatives)``; ``derivatives() -> (gradient (6,),
         gauss_newton (6, 6), exact Hessian (6, 6))`` (see :func:`_derivatives`).
     """
+    if compiled:
+        return _compiled_pose_cost(tables)
 
     def evaluate(rotation, translation):
         pairs = _pairs(rotation, translation, tables)
         return pairs.cost, partial(_derivatives, pairs, hessians=True)
+
+    return evaluate
+
+
+def _compiled_pose_cost(tables):
+    """:func:`d2d_pose_cost` with the numba kernels."""
+    from dgmm.registration import d2d_compiled  # numba loads only where Gauss-Newton D2D runs
+
+    fixed_means, fixed_covariances = tables.fixed.means, tables.fixed.covariances
+    shape = (len(fixed_means), len(tables.offsets))
+
+    def evaluate(rotation, translation):
+        rotated = tables.offsets @ rotation.T
+        moved = rotated + tables.centre + translation
+        moved_covariances = rotation @ tables.moving_covariances @ rotation.T
+        pairs = d2d_compiled.kept_pairs(*shape)
+        cost = d2d_compiled.negative_overlap(fixed_means, fixed_covariances, moved, moved_covariances,
+                                             tables.log_weights, *pairs)
+        return cost, partial(d2d_compiled.pose_derivatives, fixed_means, fixed_covariances, moved, rotated,
+                             moved_covariances, *pairs)
 
     return evaluate
 
