@@ -364,6 +364,7 @@ def test_callback_sees_every_iteration(bunny_res4):
         (dict(tol="none"), None, "tol='none'"),
         (dict(reg_covar=float("nan")), None, "reg_covar=nan"),
         (dict(variant="paper"), None, "variant='paper'"),
+        (dict(screen=0.5), None, "screen=0.5"),
         (dict(n_components=2, means_init=np.zeros((3, 3))), None, "means_init must have shape"),
         (dict(n_components=2, weights_init=[0.9, 0.9]), None, "sum to 1"),
         (dict(n_components=2, precisions_init=-np.stack([np.eye(3)] * 2)), None, "positive definite"),
