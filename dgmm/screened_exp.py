@@ -1,9 +1,10 @@
 """EM's responsibilities with the pairs far below a primitive's best left at 0, compiled with numba.
 
 The E-step's time goes to ``exp`` of every (component, primitive) pair's ``log rho``; on a surface most pairs are
-far below the primitive's best component (fr1/xyz frames at K = 100: 91% more than 50 nats below). With a screen ``s``, terms ``exp(log rho - peak)`` below ``e^-s`` are 0 and their exponentials are skipped: at ``s = 50``
-each changes its primitive's sum (at least 1) by under ``2e-22``, below rounding for up to 10⁵ components, so a
-screened fit equals the unscreened one to rounding. Beyond the paper (which computes every pair); opted into by
+far below the primitive's best component (fr1/xyz frames at K = 100: 91% more than 50 nats below). With a screen
+``s``, terms ``exp(log rho - peak)`` below ``e^-s`` are 0 and their exponentials are skipped: at ``s = 50`` each
+changes its primitive's sum (at least 1) by under ``2e-22``, below rounding for up to 10⁵ components, so a screened
+fit equals the unscreened one to rounding. Beyond the paper (which computes every pair); opted into by
 ``GaussianMixture(screen=...)``, the odometry frames' mixtures (:mod:`dgmm.odometry.frame_model`).
 """
 from __future__ import annotations
