@@ -244,13 +244,13 @@ def _e_step_block(features, coefficients, rows, out, screen=None):
 
     Responsibilities are ``rho`` over that sum; the M-step divides its weights by the sums instead of dividing
     every responsibility. ``features`` is the moment table with the E-step scale (:func:`_scaled_table`). With a
-    ``screen``, terms below ``e^-screen`` of a primitive's largest are 0 (:mod:`dgmm.screened_exp`).
+    ``screen``, terms below ``e^-screen`` of a primitive's largest are 0 (:mod:`dgmm.compiled.e_step`).
     """
     rho = np.dot(coefficients, features[rows].T, out=out)  # the E-step's per-primitive passes run down its rows
     if screen is None:
         peak, total = _exp_shifted_in_place(rho)
     else:
-        from dgmm.screened_exp import exp_shifted_screened  # numba loads only for screened fits
+        from dgmm.compiled.e_step import exp_shifted_screened  # numba loads only for screened fits
         peak, total = exp_shifted_screened(rho, float(screen))
     return rho, total, peak + np.log(total)
 
@@ -443,7 +443,7 @@ class GaussianMixture(BaseEstimator):
     screen : float or None, default=None
         None: every (component, primitive) pair enters the E-step, as in the paper. A number ``s`` (beyond the
         paper): pairs whose term is below ``e^-s`` of the primitive's largest get responsibility 0 and no
-        exponential (:mod:`dgmm.screened_exp`); at ``s = 50`` the fit is the unscreened one to rounding, in a
+        exponential (:mod:`dgmm.compiled.e_step`); at ``s = 50`` the fit is the unscreened one to rounding, in a
         fraction of the E-step's time on surfaces. The k-means start and scoring are not screened.
 
     Attributes

@@ -223,7 +223,7 @@ def d2d_pose_cost(tables, compiled=True):
     ----------
     tables : PairTables
     compiled : bool, default=True
-        The numba kernels of :mod:`~dgmm.registration.d2d_compiled`, or the numpy functions above (the reference
+        The numba kernels of :mod:`~dgmm.compiled.d2d`, or the numpy functions above (the reference
         in tests).
 
     Returns
@@ -244,7 +244,7 @@ def d2d_pose_cost(tables, compiled=True):
 
 def _compiled_pose_cost(tables):
     """:func:`d2d_pose_cost` with the numba kernels."""
-    from dgmm.registration import d2d_compiled  # numba loads only where Gauss-Newton D2D runs
+    from dgmm.compiled import d2d as d2d_compiled  # numba loads only where Gauss-Newton D2D runs
 
     fixed_means, fixed_covariances = tables.fixed.means, tables.fixed.covariances
     shape = (len(fixed_means), len(tables.offsets))

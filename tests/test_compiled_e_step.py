@@ -1,10 +1,10 @@
-"""The screened E-step (GaussianMixture(screen=...), dgmm.screened_exp): the kernel against its numpy formula, and
+"""The screened E-step (GaussianMixture(screen=...), dgmm.compiled.e_step): the kernel against its numpy formula, and
 screened fits against unscreened ones where most pairs are screened out."""
 import numpy as np
 import pytest
 
 from dgmm import GaussianMixture, Primitives
-from dgmm.screened_exp import exp_shifted_screened
+from dgmm.compiled.e_step import exp_shifted_screened
 
 
 def test_kernel_is_the_shifted_exponential_of_the_pairs_within_the_screen():

@@ -1,4 +1,4 @@
-"""The compiled P2D kernels (dgmm.registration.p2d_compiled) against the numpy reference (every pair, numpy's exp):
+"""The compiled P2D kernels (dgmm.compiled.p2d) against the numpy reference (every pair, numpy's exp):
 costs, derivatives and Gauss-Newton poses; the central-difference tests of test_registration.py check the compiled
 derivatives on their own."""
 from types import SimpleNamespace
@@ -9,7 +9,8 @@ from scipy.spatial.transform import Rotation
 from sklearn.mixture import GaussianMixture
 
 from dgmm import registration as reg
-from dgmm.registration import p2d, p2d_compiled
+from dgmm.compiled import p2d as p2d_compiled
+from dgmm.registration import p2d
 from dgmm.registration.fitted import FittedMixture, quadratic_features
 from dgmm.registration.p2d import p2d_pose_cost
 

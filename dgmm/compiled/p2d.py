@@ -6,8 +6,6 @@ under a component more than :data:`SCREEN` nats below its best adds less than ha
 the point's sum (which is at least 1), so these kernels compute every log-density (10 multiply-adds) but the
 exponential and the moments only of the pairs within :data:`SCREEN`. The numpy functions of
 :mod:`~dgmm.registration.p2d` stay the reference (``p2d_pose_cost(compiled=False)``, tested against these).
-numba's on-disk cache (``cache=True``) keeps the compiled code beside this file: only a machine's first run
-compiles.
 """
 from __future__ import annotations
 

@@ -1,0 +1,11 @@
+"""numba kernels of the library's hot loops, each beside the numpy code it replaces and tested against it.
+
+- :mod:`~dgmm.compiled.e_step`: EM's E-step exponentials with the far pairs screened out
+  (``GaussianMixture(screen=...)``, the odometry frames' fits);
+- :mod:`~dgmm.compiled.p2d` and :mod:`~dgmm.compiled.d2d`: the P2D and D2D costs and their derivatives for the
+  Gauss-Newton solver (``register_p2d`` / ``register_d2d(solver="gauss-newton")``, odometry's registrations).
+
+The library imports them only where they run, so numba's import (about half a second) and the loading of its
+on-disk cache (``cache=True``: compiled code beside each module, made by a machine's first run) cost nothing to the
+paper's fits, scoring and BFGS registrations, which stay numpy.
+"""
