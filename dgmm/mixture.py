@@ -214,9 +214,18 @@ def _exp_shifted_in_place(log_rho):
     return peak, log_rho.sum(axis=0)
 
 
-def _normalise_in_place(log_rho):
+def _exp_shifted(log_rho, screen):
+    """:func:`_exp_shifted_in_place`, or with a ``screen`` the terms below ``e^-screen`` set to 0
+    (:mod:`dgmm.compiled.e_step`)."""
+    if screen is None:
+        return _exp_shifted_in_place(log_rho)
+    from dgmm.compiled.e_step import exp_shifted_screened  # numba loads only for screened fits
+    return exp_shifted_screened(log_rho, float(screen))
+
+
+def _normalise_in_place(log_rho, screen=None):
     """Turn ``log rho`` into responsibilities in place; return ``logsumexp_i log rho`` per primitive (n_rows,)."""
-    peak, total = _exp_shifted_in_place(log_rho)
+    peak, total = _exp_shifted(log_rho, screen)
     log_rho /= total
     return peak + np.log(total)
 
@@ -247,11 +256,7 @@ def _e_step_block(features, coefficients, rows, out, screen=None):
     ``screen``, terms below ``e^-screen`` of a primitive's largest are 0 (:mod:`dgmm.compiled.e_step`).
     """
     rho = np.dot(coefficients, features[rows].T, out=out)  # the E-step's per-primitive passes run down its rows
-    if screen is None:
-        peak, total = _exp_shifted_in_place(rho)
-    else:
-        from dgmm.compiled.e_step import exp_shifted_screened  # numba loads only for screened fits
-        peak, total = exp_shifted_screened(rho, float(screen))
+    peak, total = _exp_shifted(rho, screen)
     return rho, total, peak + np.log(total)
 
 
@@ -263,9 +268,12 @@ class EStep:
     ----------
     weights, means, covariances, precisions_cholesky : ndarrays of shape (K,), (K, 3), (K, 3, 3), (K, 3, 3)
         In data units (a fitted mixture's attributes, or its ``e_step_params_``).
+    screen : float or None, default=None
+        :class:`GaussianMixture`'s ``screen``, for responsibilities as a screened fit's E-step computes them.
     """
 
-    def __init__(self, weights, means, covariances, precisions_cholesky):
+    def __init__(self, weights, means, covariances, precisions_cholesky, screen=None):
+        self.screen = screen
         self.centre = weights @ means
         self.unit, _ = _unit(means - self.centre, covariances, weights)
         self.coefficients = _component_coefficients(weights, (means - self.centre) / self.unit,
@@ -296,7 +304,7 @@ class EStep:
         """Responsibilities of the primitives ``(means, covariances)``, shape (n_rows, n_components)."""
         blocks = list(self.log_rho_blocks(means, covariances, scale))
         for block in blocks:
-            _normalise_in_place(block)
+            _normalise_in_place(block, self.screen)
         return np.ascontiguousarray(np.concatenate(blocks, axis=1).T)
 
 

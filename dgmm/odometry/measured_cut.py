@@ -62,8 +62,9 @@ class MeasuredFrame:
 
     @cached_property
     def last_e_step(self):
-        """The E-step of the fit's last M-step (under ``mixture.e_step_params_``), set up once for every cut."""
-        return EStep(*self.mixture.e_step_params_)
+        """The E-step of the fit's last M-step (under ``mixture.e_step_params_``, screened as the fit was), set up
+        once for every cut."""
+        return EStep(*self.mixture.e_step_params_, screen=self.mixture.screen)
 
     @cached_property
     def variant_weights(self):
