@@ -5,6 +5,7 @@ import pytest
 
 from dgmm import GaussianMixture, Primitives
 from dgmm.compiled.e_step import exp_shifted_screened
+from dgmm.mixture import EStep
 
 
 def test_kernel_is_the_shifted_exponential_of_the_pairs_within_the_screen():
@@ -39,3 +40,16 @@ def test_screened_fit_is_the_unscreened_fit_to_rounding(bunny_res4, mesh):
         np.testing.assert_allclose(ours, theirs, rtol=0, atol=1e-12 * np.abs(theirs).max(), err_msg=name)
         assert np.abs(getattr(coarse, name) - theirs).max() > 1e-6 * np.abs(theirs).max(), name
     assert screened.lower_bound_ == pytest.approx(reference.lower_bound_, rel=1e-13)
+
+
+def test_screened_responsibilities_are_the_unscreened_ones_to_rounding(bunny_res4):
+    """``EStep(screen=...)``, as odometry's cuts take a screened fit's last E-step: equal to the unscreened
+    responsibilities to 1e-15 at e^-50 (more than half of them are screened to 0), different at e^-3."""
+    model = GaussianMixture(50, random_state=0).fit(bunny_res4)
+    prims = Primitives.from_mesh(bunny_res4.vertices, bunny_res4.faces)
+    params = (model.weights_, model.means_, model.covariances_, model.precisions_cholesky_)
+    reference = EStep(*params).responsibilities(prims.means, prims.covariances)
+    screened = EStep(*params, screen=50).responsibilities(prims.means, prims.covariances)
+    assert np.mean(screened == 0) > 0.5
+    np.testing.assert_allclose(screened, reference, rtol=0, atol=1e-15)
+    assert np.abs(EStep(*params, screen=3).responsibilities(prims.means, prims.covariances) - reference).max() > 1e-3
