@@ -1,4 +1,4 @@
-"""The compiled D2D kernels (dgmm.compiled.d2d) against every pair's exact term and against the numpy
+"""The compiled D2D kernels (dgmm.compiled.registration) against every pair's exact term and against the numpy
 reference: cost, derivatives and Gauss-Newton poses; the central-difference tests of test_registration.py check
 the compiled derivatives on their own."""
 import numpy as np

@@ -1,4 +1,4 @@
-"""The compiled P2D kernels (dgmm.compiled.p2d) against the numpy reference (every pair, numpy's exp):
+"""The compiled P2D kernels (dgmm.compiled.registration) against the numpy reference (every pair, numpy's exp):
 costs, derivatives and Gauss-Newton poses; the central-difference tests of test_registration.py check the compiled
 derivatives on their own."""
 from types import SimpleNamespace
@@ -9,7 +9,7 @@ from scipy.spatial.transform import Rotation
 from sklearn.mixture import GaussianMixture
 
 from dgmm import registration as reg
-from dgmm.compiled import p2d as p2d_compiled
+from dgmm.compiled import registration as kernels
 from dgmm.registration import p2d
 from dgmm.registration.fitted import FittedMixture, quadratic_features
 from dgmm.registration.p2d import p2d_pose_cost
@@ -45,7 +45,7 @@ def test_bunny_terms_equal_the_numpy_reference_at_random_poses(bunny_mixture):
     """K=100 on the bunny, where most pairs lie beyond the screen: it is tested as well as the arithmetic."""
     vertices, mixture = bunny_mixture
     log_density = quadratic_features(vertices - mixture.origin) @ mixture.log_density_table
-    assert np.mean(log_density < log_density.max(axis=1, keepdims=True) - p2d_compiled.SCREEN) > 0.5
+    assert np.mean(log_density < log_density.max(axis=1, keepdims=True) - kernels.SCREEN) > 0.5
     compiled, reference = _both(vertices, mixture)
     rng = np.random.default_rng(0)
     for angle in (0.0, 5.0, 15.0):

@@ -223,7 +223,7 @@ def d2d_pose_cost(tables, compiled=True):
     ----------
     tables : PairTables
     compiled : bool, default=True
-        The numba kernels of :mod:`~dgmm.compiled.d2d`, or the numpy functions above (the reference
+        The numba kernels of :mod:`~dgmm.compiled.registration`, or the numpy functions above (the reference
         in tests).
 
     Returns
@@ -244,7 +244,7 @@ def d2d_pose_cost(tables, compiled=True):
 
 def _compiled_pose_cost(tables):
     """:func:`d2d_pose_cost` with the numba kernels."""
-    from dgmm.compiled import d2d as d2d_compiled  # numba loads only where Gauss-Newton D2D runs
+    from dgmm.compiled import registration as kernels  # numba loads only where Gauss-Newton D2D runs
 
     fixed_means, fixed_covariances = tables.fixed.means, tables.fixed.covariances
     shape = (len(fixed_means), len(tables.offsets))
@@ -253,10 +253,10 @@ def _compiled_pose_cost(tables):
         rotated = tables.offsets @ rotation.T
         moved = rotated + tables.centre + translation
         moved_covariances = rotation @ tables.moving_covariances @ rotation.T
-        pairs = d2d_compiled.kept_pairs(*shape)
-        cost = d2d_compiled.negative_overlap(fixed_means, fixed_covariances, moved, moved_covariances,
-                                             tables.log_weights, *pairs)
-        return cost, partial(d2d_compiled.pose_derivatives, fixed_means, fixed_covariances, moved, rotated,
+        pairs = kernels.d2d_kept_pairs(*shape)
+        cost = kernels.d2d_negative_overlap(fixed_means, fixed_covariances, moved, moved_covariances,
+                                            tables.log_weights, NEGLIGIBLE, EXP_FLOOR, *pairs)
+        return cost, partial(kernels.d2d_pose_derivatives, fixed_means, fixed_covariances, moved, rotated,
                              moved_covariances, *pairs)
 
     return evaluate

@@ -94,7 +94,7 @@ def p2d_pose_cost(points, centre, mixture, compiled=True):
     centre : ndarray of shape (3,)
     mixture : FittedMixture
     compiled : bool, default=True
-        The numba kernels of :mod:`~dgmm.compiled.p2d` (the pairs within its screen), or the numpy
+        The numba kernels of :mod:`~dgmm.compiled.registration` (the pairs within its screen), or the numpy
         functions above (every pair; the reference in tests).
 
     Returns
@@ -132,7 +132,7 @@ def _numpy_pose_cost(local, centre, mixture):
 
 def _compiled_pose_cost(local, centre, mixture):
     """:func:`p2d_pose_cost` with the numba kernels."""
-    from dgmm.compiled import p2d as p2d_compiled  # numba loads only where Gauss-Newton P2D runs
+    from dgmm.compiled import registration as kernels  # numba loads only where Gauss-Newton P2D runs
 
     table, precisions = mixture.log_density_table, mixture.precisions
     resp_shape = (len(local), table.shape[1])
@@ -141,9 +141,9 @@ def _compiled_pose_cost(local, centre, mixture):
     def evaluate(rotation, translation):
         rotated = local @ rotation.T
         offsets = rotated + (centre + translation - mixture.origin)
-        pairs = p2d_compiled.screened_pairs(*resp_shape)
-        return (p2d_compiled.negative_mean_log_likelihood(offsets, table, *pairs),
-                partial(p2d_compiled.pose_derivatives, offsets, rotated, precisions, precision_means, *pairs))
+        pairs = kernels.p2d_screened_pairs(*resp_shape)
+        return (kernels.p2d_negative_mean_log_likelihood(offsets, table, *pairs),
+                partial(kernels.p2d_pose_derivatives, offsets, rotated, precisions, precision_means, *pairs))
 
     return evaluate
 

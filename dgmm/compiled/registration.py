@@ -1,0 +1,336 @@
+"""The P2D and D2D costs and their derivatives compiled with numba, for the Gauss-Newton solver.
+
+- P2D (:func:`dgmm.registration.p2d.p2d_pose_cost`) spends its time in the likelihood of every trial pose:
+  ``n_points x n_components`` exponentials. A point's responsibility ``e^{l_nk - max_k l_nk}`` under a component more
+  than :data:`SCREEN` nats below its best adds less than half a unit in the last place to the point's sum (which is at
+  least 1), so the P2D kernels compute every log-density (10 multiply-adds) but the exponential and the moments only
+  of the pairs within :data:`SCREEN`.
+- D2D (:func:`dgmm.registration.d2d.d2d_pose_cost`, odometry's inner loop): the numpy D2D bounds every pair's term
+  before computing the ones that may matter, then works on arrays of a few hundred to a few thousand pairs, and at
+  odometry's sizes (K = 100 per frame) its time goes to numpy's per-call overhead. Here every pair's exact term is
+  computed in one pass (about 50 floating-point operations a pair), and the derivatives run over the pairs within
+  ``e^-negligible`` of the largest term, the pairs the numpy derivatives keep.
+
+The numpy functions stay the reference (``p2d_pose_cost(compiled=False)``, ``d2d_pose_cost(compiled=False)``,
+tested against these). The kernels and the 3x3 helpers they call live in this one file, and the registration
+modules' thresholds come in as arguments: numba's on-disk cache checks only the file of the function it compiled,
+so a helper or a constant in another file could change without the cached code noticing.
+"""
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+# ---- 3x3 helpers, and the pose matrices Σ Jᵀ W J over (δ, ω), J = [I, -[p]x] (solvers.pose_matrices')
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _skew(a, out):
+    """``[a]x`` into ``out`` (3, 3)."""
+    out[0, 0], out[0, 1], out[0, 2] = 0.0, -a[2], a[1]
+    out[1, 0], out[1, 1], out[1, 2] = a[2], 0.0, -a[0]
+    out[2, 0], out[2, 1], out[2, 2] = -a[1], a[0], 0.0
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _product(x, y, out):
+    """``out = x y`` for 3x3 matrices."""
+    for a in range(3):
+        for b in range(3):
+            out[a, b] = x[a, 0] * y[0, b] + x[a, 1] * y[1, b] + x[a, 2] * y[2, b]
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _add_pose_matrix(skew_p, weight, scale, cross, out):
+    """``out += scale Jᵀ W J`` (6, 6) for a symmetric ``W`` (3, 3), ``J = [I, -[p]x]`` and ``skew_p = [p]x``: the
+    blocks ``W``, ``-W [p]x`` and its transpose, ``-[p]x W [p]x``; ``cross`` (3, 3) is scratch for ``W [p]x``."""
+    _product(weight, skew_p, cross)
+    for r in range(3):
+        for s in range(3):
+            out[r, s] += scale * weight[r, s]
+            out[r, 3 + s] -= scale * cross[r, s]
+            out[3 + s, r] -= scale * cross[r, s]
+            out[3 + r, 3 + s] -= scale * (skew_p[r, 0] * cross[0, s] + skew_p[r, 1] * cross[1, s]
+                                          + skew_p[r, 2] * cross[2, s])
+
+
+# ---- P2D
+
+SCREEN = 50.0
+"""Pairs with ``l_nk < max_k l_nk - SCREEN`` are left out: ``e^-50 ~ 2e-22``, so even 10⁵ of them add under
+``2e-17`` to a sum of at least 1, below half its last place (``1.1e-16``)."""
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _log_densities(offset, table, out):
+    """``quadratic_features(offset) @ table`` for one offset (3,) into ``out`` (n_components,); returns its max."""
+    x, y, z = offset[0], offset[1], offset[2]
+    xx, yy, zz, xy, xz, yz = x * x, y * y, z * z, x * y, x * z, y * z
+    for k in range(out.shape[0]):  # one expression per component: the loop vectorises
+        out[k] = (xx * table[0, k] + yy * table[1, k] + zz * table[2, k] + xy * table[3, k] + xz * table[4, k]
+                  + yz * table[5, k] + x * table[6, k] + y * table[7, k] + z * table[8, k] + table[9, k])
+    top = -np.inf
+    for k in range(out.shape[0]):
+        top = max(top, out[k])
+    return top
+
+
+def p2d_screened_pairs(n_points, n_components):
+    """Buffers for :func:`p2d_negative_mean_log_likelihood` to leave its screened pairs in, for
+    :func:`p2d_pose_derivatives` at the same pose: ``(starts (n_points + 1,), components, terms, sums (n_points,))``."""
+    size = n_points * n_components
+    return (np.empty(n_points + 1, dtype=np.int64), np.empty(size, dtype=np.int64), np.empty(size),
+            np.empty(n_points))
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def p2d_negative_mean_log_likelihood(offsets, table, starts, components, terms, sums):
+    """``-1/n Σ_n log Σ_k π_k N(y_n | μ_k, Σ_k)`` from the offsets ``y_n - origin`` (n_points, 3) and
+    :attr:`~dgmm.registration.fitted.FittedMixture.log_density_table` (10, n_components).
+
+    Leaves the pairs within :data:`SCREEN` in the :func:`p2d_screened_pairs` buffers: point ``n``'s are
+    ``components[starts[n]:starts[n + 1]]``, with ``e^{l_nk - max_k l_nk}`` in ``terms`` and their sum in
+    ``sums[n]``.
+    """
+    log_density = np.empty(table.shape[1])
+    total = 0.0
+    count = 0
+    for n in range(offsets.shape[0]):
+        top = _log_densities(offsets[n], table, log_density)
+        starts[n] = count
+        threshold = top - SCREEN
+        for k in range(log_density.shape[0]):  # branch-free: every index is written, the kept ones advance
+            components[count] = k
+            count += log_density[k] > threshold
+        sum_ = 0.0
+        for i in range(starts[n], count):
+            terms[i] = math.exp(log_density[components[i]] - top)
+            sum_ += terms[i]
+        sums[n] = sum_
+        total += math.log(sum_) + top
+    starts[offsets.shape[0]] = count
+    return -total / offsets.shape[0]
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def p2d_pose_derivatives(offsets, rotated, precisions, precision_means, starts, components, terms, sums):
+    """Gradient, Gauss-Newton matrix and exact Hessian over ``(δ, ω)`` of the cost at the pose of ``offsets``
+    (what :func:`~dgmm.registration.p2d.p2d_pose_cost`'s ``derivatives()`` returns), from the screened pairs
+    :func:`p2d_negative_mean_log_likelihood` left at that pose.
+
+    Parameters
+    ----------
+    offsets : ndarray of shape (n_points, 3)
+        ``y_n - origin``.
+    rotated : ndarray of shape (n_points, 3)
+        ``p_n = R (x_n - c)``: ``dy_n = δ - [p_n]x ω``.
+    precisions : ndarray of shape (n_components, 3, 3)
+        ``P_k``.
+    precision_means : ndarray of shape (n_components, 3)
+        ``P_k (μ_k - origin)``.
+    starts, components, terms, sums : ndarray
+        The screened pairs (:func:`p2d_screened_pairs`).
+
+    Returns
+    -------
+    gradient : ndarray of shape (6,)
+    gauss_newton : ndarray of shape (6, 6)
+        ``1/n Σ_n J_nᵀ W_n J_n``, ``W_n = Σ_k r_nk P_k`` and ``J_n = [I, -[p_n]x]``.
+    exact : ndarray of shape (6, 6)
+        The same with the exact Hessian of ``-log p(y_n)``, ``W_n - (Σ_k r_nk g_nk g_nkᵀ - ḡ_n ḡ_nᵀ)``, plus the
+        rotation's second-order term ``Σ_n sym(ḡ_n p_nᵀ) - (ḡ_n·p_n) I`` (``g_nk = P_k (y_n - μ_k)``).
+    """
+    n_points = offsets.shape[0]
+    gradient = np.zeros(6)
+    gauss_newton = np.zeros((6, 6))
+    exact = np.zeros((6, 6))
+    outer = np.zeros((3, 3))
+    weight, spread, hessian = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
+    g, mean_g = np.empty(3), np.empty(3)
+    skew_p, cross = np.empty((3, 3)), np.empty((3, 3))
+    for n in range(n_points):
+        d = offsets[n]
+        weight[:] = 0.0
+        spread[:] = 0.0
+        mean_g[:] = 0.0
+        for i in range(starts[n], starts[n + 1]):
+            k, r = components[i], terms[i] / sums[n]
+            for a in range(3):
+                g[a] = (precisions[k, a, 0] * d[0] + precisions[k, a, 1] * d[1] + precisions[k, a, 2] * d[2]
+                        - precision_means[k, a])
+                mean_g[a] += r * g[a]
+            for a in range(3):
+                for b in range(3):
+                    weight[a, b] += r * precisions[k, a, b]
+                    spread[a, b] += r * g[a] * g[b]
+        for a in range(3):
+            for b in range(3):
+                hessian[a, b] = weight[a, b] - spread[a, b] + mean_g[a] * mean_g[b]
+                outer[a, b] += mean_g[a] * rotated[n, b]
+        p = rotated[n]
+        for a in range(3):  # J_nᵀ ḡ_n: (ḡ_n, p_n x ḡ_n)
+            gradient[a] += mean_g[a]
+            gradient[3 + a] += p[(a + 1) % 3] * mean_g[(a + 2) % 3] - p[(a + 2) % 3] * mean_g[(a + 1) % 3]
+        _skew(p, skew_p)
+        _add_pose_matrix(skew_p, weight, 1.0, cross, gauss_newton)
+        _add_pose_matrix(skew_p, hessian, 1.0, cross, exact)
+    gradient /= n_points
+    gauss_newton /= n_points
+    exact /= n_points
+    outer /= n_points
+    trace = outer[0, 0] + outer[1, 1] + outer[2, 2]
+    for a in range(3):
+        for b in range(3):
+            exact[3 + a, 3 + b] += 0.5 * (outer[a, b] + outer[b, a]) - (trace if a == b else 0.0)
+    return gradient, gauss_newton, exact
+
+
+# ---- D2D
+
+def d2d_kept_pairs(n_fixed, n_moving):
+    """Buffers for :func:`d2d_negative_overlap` to leave the kept pairs in, for :func:`d2d_pose_derivatives` at the same
+    pose: ``(count (1,), fixed index, moving index, log terms)``."""
+    size = n_fixed * n_moving
+    return np.zeros(1, dtype=np.int64), np.empty(size, dtype=np.int64), np.empty(size, dtype=np.int64), np.empty(size)
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _inverse_and_exponent(fixed_covariance, moving_covariance, y, inverse):
+    """``S⁻¹`` of ``S = Σᵢ + C`` into ``inverse`` (by its adjugate, as the numpy cost) and ``-½ yᵀ S⁻¹ y``."""
+    a, b, c = fixed_covariance[0, 0] + moving_covariance[0, 0], fixed_covariance[1, 1] + moving_covariance[1, 1], \
+        fixed_covariance[2, 2] + moving_covariance[2, 2]
+    d, e, f = fixed_covariance[0, 1] + moving_covariance[0, 1], fixed_covariance[0, 2] + moving_covariance[0, 2], \
+        fixed_covariance[1, 2] + moving_covariance[1, 2]
+    axx, ayy, azz = b * c - f * f, a * c - e * e, a * b - d * d
+    axy, axz, ayz = e * f - d * c, d * f - b * e, d * e - a * f
+    determinant = a * axx + d * axy + e * axz
+    inverse[0, 0], inverse[1, 1], inverse[2, 2] = axx / determinant, ayy / determinant, azz / determinant
+    inverse[0, 1] = inverse[1, 0] = axy / determinant
+    inverse[0, 2] = inverse[2, 0] = axz / determinant
+    inverse[1, 2] = inverse[2, 1] = ayz / determinant
+    quadratic = 0.0
+    for r in range(3):
+        quadratic += y[r] * (inverse[r, 0] * y[0] + inverse[r, 1] * y[1] + inverse[r, 2] * y[2])
+    return -0.5 * quadratic
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def d2d_negative_overlap(fixed_means, fixed_covariances, moved, moved_covariances, log_weights, negligible, floor,
+                         count, fixed_index, moving_index, log_terms):
+    """The D2D cost ``-Σᵢⱼ πᵢ πⱼ exp(-½ yᵢⱼᵀ Sᵢⱼ⁻¹ yᵢⱼ)`` over the pairs within ``e^-negligible`` of the largest
+    term, which it leaves in the :func:`d2d_kept_pairs` buffers.
+
+    Parameters
+    ----------
+    fixed_means : ndarray of shape (n_fixed, 3)
+    fixed_covariances : ndarray of shape (n_fixed, 3, 3)
+    moved : ndarray of shape (n_moving, 3)
+        ``R (μⱼ - c) + c + t'``.
+    moved_covariances : ndarray of shape (n_moving, 3, 3)
+        ``R Σⱼ Rᵀ``.
+    log_weights : ndarray of shape (n_fixed, n_moving)
+        ``log πᵢ + log πⱼ``.
+    negligible, floor : float
+        :data:`dgmm.registration.d2d.NEGLIGIBLE` and the numpy cost's exponent floor
+        (:data:`dgmm.registration.fitted.EXP_FLOOR`).
+    count, fixed_index, moving_index, log_terms : ndarray
+        The buffers.
+    """
+    n_fixed, n_moving = fixed_means.shape[0], moved.shape[0]
+    exponents = np.empty(n_fixed * n_moving)
+    inverse, y = np.empty((3, 3)), np.empty(3)
+    top = -np.inf
+    for i in range(n_fixed):
+        for j in range(n_moving):
+            for r in range(3):
+                y[r] = fixed_means[i, r] - moved[j, r]
+            exponent = max(_inverse_and_exponent(fixed_covariances[i], moved_covariances[j], y, inverse)
+                           + log_weights[i, j], floor)  # floored as the numpy cost's
+            exponents[i * n_moving + j] = exponent
+            top = max(top, exponent)
+    kept = 0
+    cost = 0.0
+    for pair in range(n_fixed * n_moving):
+        if exponents[pair] >= top - negligible:
+            fixed_index[kept], moving_index[kept] = pair // n_moving, pair % n_moving
+            log_terms[kept] = exponents[pair]
+            cost -= math.exp(exponents[pair])
+            kept += 1
+    count[0] = kept
+    return cost
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _add_transposed_product(weight, x, y, out):
+    """``out += weight xᵀ y`` for 3x3 ``x`` and ``y``."""
+    for a in range(3):
+        for b in range(3):
+            out[a, b] += weight * (x[0, a] * y[0, b] + x[1, a] * y[1, b] + x[2, a] * y[2, b])
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def d2d_pose_derivatives(fixed_means, fixed_covariances, moved, rotated, moved_covariances, count, fixed_index,
+                         moving_index, log_terms):
+    """Gradient, Gauss-Newton matrix and exact Hessian of the D2D cost over ``(δ, ω)`` at the pose
+    :func:`d2d_negative_overlap` left its kept pairs for (``rotated``: ``p = R (μⱼ - c)``); the formulas of
+    :func:`dgmm.registration.d2d._derivatives`, pair by pair.
+
+    Returns
+    -------
+    gradient : ndarray of shape (6,)
+    gauss_newton : ndarray of shape (6, 6)
+    exact : ndarray of shape (6, 6)
+    """
+    gradient = np.zeros(6)
+    gauss_newton, spread = np.zeros((6, 6)), np.zeros((6, 6))
+    second = np.zeros((3, 3))
+    mixed, spin, across = np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3))
+    inverse, y, v, cv, arm, grad_log = np.empty((3, 3)), np.empty(3), np.empty(3), np.empty(3), np.empty(3), \
+        np.empty(6)
+    skew_v, skew_cv, skew_p = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
+    c_skew_v, u, inverse_u, cross = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
+    for pair in range(count[0]):
+        i, j = fixed_index[pair], moving_index[pair]
+        c, p = moved_covariances[j], rotated[j]
+        for r in range(3):
+            y[r] = fixed_means[i, r] - moved[j, r]
+        _inverse_and_exponent(fixed_covariances[i], c, y, inverse)
+        term = math.exp(log_terms[pair])
+        for r in range(3):
+            v[r] = inverse[r, 0] * y[0] + inverse[r, 1] * y[1] + inverse[r, 2] * y[2]
+        for r in range(3):
+            cv[r] = c[r, 0] * v[0] + c[r, 1] * v[1] + c[r, 2] * v[2]
+            arm[r] = p[r] + cv[r]
+        for r in range(3):
+            grad_log[r] = v[r]
+            grad_log[3 + r] = arm[(r + 1) % 3] * v[(r + 2) % 3] - arm[(r + 2) % 3] * v[(r + 1) % 3]  # (p + Cv) x v
+        for r in range(6):
+            gradient[r] -= term * grad_log[r]
+            for s in range(6):
+                spread[r, s] += term * grad_log[r] * grad_log[s]
+        _skew(p, skew_p)
+        _add_pose_matrix(skew_p, inverse, term, cross, gauss_newton)  # Σ term Jᵀ S⁻¹ J, as pose_matrices
+        _skew(v, skew_v)
+        _skew(cv, skew_cv)
+        _product(c, skew_v, c_skew_v)
+        for r in range(3):
+            for s in range(3):
+                u[r, s] = c_skew_v[r, s] - skew_cv[r, s]
+        _product(inverse, u, inverse_u)
+        _add_transposed_product(term, skew_v, c_skew_v, second)
+        _add_transposed_product(-term, u, inverse_u, second)
+        _add_transposed_product(term, inverse_u, skew_p, mixed)
+        for r in range(3):
+            for s in range(3):
+                spin[r, s] += term * v[r] * arm[s]
+                across[r, s] += term * inverse_u[r, s]
+    exact = gauss_newton - spread
+    trace = spin[0, 0] + spin[1, 1] + spin[2, 2]
+    for r in range(3):
+        for s in range(3):
+            exact[3 + r, 3 + s] -= (second[r, s] + mixed[r, s] + mixed[s, r] + 0.5 * (spin[r, s] + spin[s, r])
+                                    - (trace if r == s else 0.0))
+            exact[3 + r, s] += across[s, r]  # second[3:, :3] = -(Σ term S⁻¹ U)ᵀ
+            exact[s, 3 + r] += across[s, r]
+    return gradient, gauss_newton, exact
