@@ -34,6 +34,14 @@ def _skew(a, out):
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
+def _symmetric(a00, a01, a02, a11, a12, a22, out):
+    """The symmetric matrix of these entries into ``out`` (3, 3)."""
+    out[0, 0], out[0, 1], out[0, 2] = a00, a01, a02
+    out[1, 0], out[1, 1], out[1, 2] = a01, a11, a12
+    out[2, 0], out[2, 1], out[2, 2] = a02, a12, a22
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
 def _product(x, y, out):
     """``out = x y`` for 3x3 matrices."""
     for a in range(3):
@@ -76,27 +84,41 @@ def _log_densities(offset, table, out):
     return top
 
 
-def p2d_screened_pairs(n_points, n_components):
-    """Buffers for :func:`p2d_negative_mean_log_likelihood` to leave its screened pairs in, for
-    :func:`p2d_pose_derivatives` at the same pose: ``(starts (n_points + 1,), components, terms, sums (n_points,))``."""
+def p2d_pose_buffers(n_points, n_components):
+    """Buffers for :func:`p2d_negative_mean_log_likelihood` to leave a pose's moved points and screened pairs in,
+    for :func:`p2d_pose_derivatives` at the same pose: ``(rotated (n_points, 3), offsets (n_points, 3), starts
+    (n_points + 1,), components, terms, sums (n_points,))``."""
     size = n_points * n_components
-    return (np.empty(n_points + 1, dtype=np.int64), np.empty(size, dtype=np.int64), np.empty(size),
-            np.empty(n_points))
+    return (np.empty((n_points, 3)), np.empty((n_points, 3)), np.empty(n_points + 1, dtype=np.int64),
+            np.empty(size, dtype=np.int64), np.empty(size), np.empty(n_points))
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def p2d_negative_mean_log_likelihood(offsets, table, starts, components, terms, sums):
-    """``-1/n Σ_n log Σ_k π_k N(y_n | μ_k, Σ_k)`` from the offsets ``y_n - origin`` (n_points, 3) and
-    :attr:`~dgmm.registration.fitted.FittedMixture.log_density_table` (10, n_components).
+def p2d_negative_mean_log_likelihood(local, rotation, shift, table, rotated, offsets, starts, components, terms,
+                                     sums):
+    """``-1/n Σ_n log Σ_k π_k N(y_n | μ_k, Σ_k)`` of the points ``y_n = R x_n + shift + origin``.
 
-    Leaves the pairs within :data:`SCREEN` in the :func:`p2d_screened_pairs` buffers: point ``n``'s are
-    ``components[starts[n]:starts[n + 1]]``, with ``e^{l_nk - max_k l_nk}`` in ``terms`` and their sum in
-    ``sums[n]``.
+    Parameters
+    ----------
+    local : ndarray of shape (n_points, 3)
+        ``x_n``, the points about the centre of rotation.
+    rotation : ndarray of shape (3, 3)
+    shift : ndarray of shape (3,)
+        ``c + t' - origin``.
+    table : ndarray of shape (10, n_components)
+        :attr:`~dgmm.registration.fitted.FittedMixture.log_density_table`.
+    rotated, offsets, starts, components, terms, sums : ndarray
+        The :func:`p2d_pose_buffers`, filled: ``rotated`` with ``R x_n``, ``offsets`` with ``y_n - origin``, and
+        the pairs within :data:`SCREEN`: point ``n``'s are ``components[starts[n]:starts[n + 1]]``, with
+        ``e^{l_nk - max_k l_nk}`` in ``terms`` and their sum in ``sums[n]``.
     """
     log_density = np.empty(table.shape[1])
     total = 0.0
     count = 0
-    for n in range(offsets.shape[0]):
+    for n in range(local.shape[0]):
+        for a in range(3):
+            rotated[n, a] = rotation[a, 0] * local[n, 0] + rotation[a, 1] * local[n, 1] + rotation[a, 2] * local[n, 2]
+            offsets[n, a] = rotated[n, a] + shift[a]
         top = _log_densities(offsets[n], table, log_density)
         starts[n] = count
         threshold = top - SCREEN
@@ -109,28 +131,25 @@ def p2d_negative_mean_log_likelihood(offsets, table, starts, components, terms, 
             sum_ += terms[i]
         sums[n] = sum_
         total += math.log(sum_) + top
-    starts[offsets.shape[0]] = count
-    return -total / offsets.shape[0]
+    starts[local.shape[0]] = count
+    return -total / local.shape[0]
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def p2d_pose_derivatives(offsets, rotated, precisions, precision_means, starts, components, terms, sums):
+def p2d_pose_derivatives(precisions, precision_means, rotated, offsets, starts, components, terms, sums):
     """Gradient, Gauss-Newton matrix and exact Hessian over ``(δ, ω)`` of the cost at the pose of ``offsets``
     (what :func:`~dgmm.registration.p2d.p2d_pose_cost`'s ``derivatives()`` returns), from the screened pairs
     :func:`p2d_negative_mean_log_likelihood` left at that pose.
 
     Parameters
     ----------
-    offsets : ndarray of shape (n_points, 3)
-        ``y_n - origin``.
-    rotated : ndarray of shape (n_points, 3)
-        ``p_n = R (x_n - c)``: ``dy_n = δ - [p_n]x ω``.
     precisions : ndarray of shape (n_components, 3, 3)
         ``P_k``.
     precision_means : ndarray of shape (n_components, 3)
         ``P_k (μ_k - origin)``.
-    starts, components, terms, sums : ndarray
-        The screened pairs (:func:`p2d_screened_pairs`).
+    rotated, offsets, starts, components, terms, sums : ndarray
+        The :func:`p2d_pose_buffers` as the cost left them: ``rotated`` holds ``p_n = R (x_n - c)`` (``dy_n = δ -
+        [p_n]x ω``).
 
     Returns
     -------
@@ -146,32 +165,51 @@ def p2d_pose_derivatives(offsets, rotated, precisions, precision_means, starts, 
     gauss_newton = np.zeros((6, 6))
     exact = np.zeros((6, 6))
     outer = np.zeros((3, 3))
-    weight, spread, hessian = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
-    g, mean_g = np.empty(3), np.empty(3)
+    weight, hessian = np.empty((3, 3)), np.empty((3, 3))
     skew_p, cross = np.empty((3, 3)), np.empty((3, 3))
     for n in range(n_points):
-        d = offsets[n]
-        weight[:] = 0.0
-        spread[:] = 0.0
-        mean_g[:] = 0.0
+        d0, d1, d2 = offsets[n, 0], offsets[n, 1], offsets[n, 2]
+        # The sums over the point's pairs in scalars (the 3x3 ones symmetric): kept in registers, where sums into
+        # arrays would be stored and reloaded at every pair.
+        w00 = w01 = w02 = w11 = w12 = w22 = 0.0  # W_n = Σ_k r_nk P_k
+        s00 = s01 = s02 = s11 = s12 = s22 = 0.0  # Σ_k r_nk g_nk g_nkᵀ
+        m0 = m1 = m2 = 0.0  # ḡ_n
         for i in range(starts[n], starts[n + 1]):
             k, r = components[i], terms[i] / sums[n]
-            for a in range(3):
-                g[a] = (precisions[k, a, 0] * d[0] + precisions[k, a, 1] * d[1] + precisions[k, a, 2] * d[2]
-                        - precision_means[k, a])
-                mean_g[a] += r * g[a]
-            for a in range(3):
-                for b in range(3):
-                    weight[a, b] += r * precisions[k, a, b]
-                    spread[a, b] += r * g[a] * g[b]
-        for a in range(3):
-            for b in range(3):
-                hessian[a, b] = weight[a, b] - spread[a, b] + mean_g[a] * mean_g[b]
-                outer[a, b] += mean_g[a] * rotated[n, b]
+            p00, p01, p02 = precisions[k, 0, 0], precisions[k, 0, 1], precisions[k, 0, 2]
+            p11, p12, p22 = precisions[k, 1, 1], precisions[k, 1, 2], precisions[k, 2, 2]
+            g0 = p00 * d0 + p01 * d1 + p02 * d2 - precision_means[k, 0]
+            g1 = p01 * d0 + p11 * d1 + p12 * d2 - precision_means[k, 1]
+            g2 = p02 * d0 + p12 * d1 + p22 * d2 - precision_means[k, 2]
+            m0 += r * g0
+            m1 += r * g1
+            m2 += r * g2
+            w00 += r * p00
+            w01 += r * p01
+            w02 += r * p02
+            w11 += r * p11
+            w12 += r * p12
+            w22 += r * p22
+            s00 += r * g0 * g0
+            s01 += r * g0 * g1
+            s02 += r * g0 * g2
+            s11 += r * g1 * g1
+            s12 += r * g1 * g2
+            s22 += r * g2 * g2
+        _symmetric(w00, w01, w02, w11, w12, w22, weight)
+        _symmetric(w00 - s00 + m0 * m0, w01 - s01 + m0 * m1, w02 - s02 + m0 * m2, w11 - s11 + m1 * m1,
+                   w12 - s12 + m1 * m2, w22 - s22 + m2 * m2, hessian)
         p = rotated[n]
-        for a in range(3):  # J_nᵀ ḡ_n: (ḡ_n, p_n x ḡ_n)
-            gradient[a] += mean_g[a]
-            gradient[3 + a] += p[(a + 1) % 3] * mean_g[(a + 2) % 3] - p[(a + 2) % 3] * mean_g[(a + 1) % 3]
+        for b in range(3):
+            outer[0, b] += m0 * p[b]
+            outer[1, b] += m1 * p[b]
+            outer[2, b] += m2 * p[b]
+        gradient[0] += m0  # J_nᵀ ḡ_n: (ḡ_n, p_n x ḡ_n)
+        gradient[1] += m1
+        gradient[2] += m2
+        gradient[3] += p[1] * m2 - p[2] * m1
+        gradient[4] += p[2] * m0 - p[0] * m2
+        gradient[5] += p[0] * m1 - p[1] * m0
         _skew(p, skew_p)
         _add_pose_matrix(skew_p, weight, 1.0, cross, gauss_newton)
         _add_pose_matrix(skew_p, hessian, 1.0, cross, exact)

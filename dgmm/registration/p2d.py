@@ -135,15 +135,15 @@ def _compiled_pose_cost(local, centre, mixture):
     from dgmm.compiled import registration as kernels  # numba loads only where Gauss-Newton P2D runs
 
     table, precisions = mixture.log_density_table, mixture.precisions
-    resp_shape = (len(local), table.shape[1])
+    buffers_shape = (len(local), table.shape[1])
     precision_means = np.ascontiguousarray(mixture.moment_table[:, 9:])
+    local = np.ascontiguousarray(local)
 
     def evaluate(rotation, translation):
-        rotated = local @ rotation.T
-        offsets = rotated + (centre + translation - mixture.origin)
-        pairs = kernels.p2d_screened_pairs(*resp_shape)
-        return (kernels.p2d_negative_mean_log_likelihood(offsets, table, *pairs),
-                partial(kernels.p2d_pose_derivatives, offsets, rotated, precisions, precision_means, *pairs))
+        buffers = kernels.p2d_pose_buffers(*buffers_shape)
+        cost = kernels.p2d_negative_mean_log_likelihood(local, rotation, centre + translation - mixture.origin,
+                                                        table, *buffers)
+        return cost, partial(kernels.p2d_pose_derivatives, precisions, precision_means, *buffers)
 
     return evaluate
 
