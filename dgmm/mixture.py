@@ -247,16 +247,16 @@ def _scaled_table(table, scale):
     return scaled
 
 
-def _e_step_block(features, coefficients, rows, out, screen=None):
+def _e_step_block(features, coefficients, rows, out):
     """The E-step of the primitives ``rows``: ``rho / max_i rho`` (in ``out``, (n_components, n_rows)), each
     primitive's sum of it, and its log-normaliser.
 
     Responsibilities are ``rho`` over that sum; the M-step divides its weights by the sums instead of dividing
-    every responsibility. ``features`` is the moment table with the E-step scale (:func:`_scaled_table`). With a
-    ``screen``, terms below ``e^-screen`` of a primitive's largest are 0 (:mod:`dgmm.compiled.e_step`).
+    every responsibility. ``features`` is the moment table with the E-step scale (:func:`_scaled_table`). A screened
+    fit runs :func:`dgmm.compiled.e_step.screened_e_step_sums` instead, this and the M-step sums in one kernel.
     """
     rho = np.dot(coefficients, features[rows].T, out=out)  # the E-step's per-primitive passes run down its rows
-    peak, total = _exp_shifted(rho, screen)
+    peak, total = _exp_shifted_in_place(rho)
     return rho, total, peak + np.log(total)
 
 
@@ -590,6 +590,8 @@ class GaussianMixture(BaseEstimator):
         reg_covar = self.reg_covar / unit**2
         rng = np.random.default_rng(self.random_state)
         log_norm = np.empty(len(prims))
+        if self.screen is not None:
+            from dgmm.compiled.e_step import screened_e_step_sums  # numba loads only for screened fits
 
         def e_step(params, blocks):
             """E-step block by block: the M-step sums of its responsibilities and the bound (size-weighted
@@ -597,9 +599,15 @@ class GaussianMixture(BaseEstimator):
             coefficients = _component_coefficients(*params, unit=unit)
 
             def block(rows, out):
-                rho, total, log_norm[rows] = _e_step_block(features, coefficients, rows, out, self.screen)
+                rho, total, log_norm[rows] = _e_step_block(features, coefficients, rows, out)
                 return _m_step_sums(rho, table[rows, :10], mstep_weights[rows] / total)
-            sums = blocks.run(block)
+
+            def screened_block(rows, out):  # the same, fused in one kernel over the pairs within the screen
+                return screened_e_step_sums(features[rows], transposed, table[rows, :10], mstep_weights[rows],
+                                            float(self.screen), log_norm[rows])
+            if self.screen is not None:
+                transposed = np.ascontiguousarray(coefficients.T)
+            sums = blocks.run(block if self.screen is None else screened_block)
             return sums, np.dot(mstep_weights, log_norm) / mstep_weights.sum()
 
         with BlockPass(len(prims), self.n_components, self.memory_limit, self.n_jobs) as blocks:
