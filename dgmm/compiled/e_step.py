@@ -11,6 +11,7 @@ fit equals the unscreened one to rounding. Beyond the paper (which computes ever
   numpy E-step's product, exponentials and M-step product, one primitive at a time, the M-step over the kept pairs
   only);
 - :func:`exp_shifted_screened`: the exponentials alone, for responsibilities (``EStep(screen=...)``).
+"""
 from __future__ import annotations
 
 import math
