@@ -218,7 +218,7 @@ def main():
         print("### Sweep profile\n")
         print(f"`make profile` at commit {commit}: cold sweep {wall:.0f} s on {args.cores} cores; yardstick "
               f"(scikit-learn, 50k points, K=100, 25 iterations, 1 thread) {yardstick:.2f} s; "
-              f"**{wall / yardstick:.1f} sweep units** (goal ≤ 25); load average before "
+              f"**{wall / yardstick:.1f} sweep units** (goal ≤ 15); load average before "
               f"{' / '.join(f'{x:.2f}' for x in load_before)}, after {' / '.join(f'{x:.2f}' for x in load)}. "
               "Per rule, from each job's Snakemake `benchmark:` file (results/benchmarks/) and, for `fit` and "
               "`registration_chunk`, the job's own timing table (its seeds' or trials' seconds): overhead is the "

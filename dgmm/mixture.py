@@ -597,17 +597,17 @@ class GaussianMixture(BaseEstimator):
             """E-step block by block: the M-step sums of its responsibilities and the bound (size-weighted
             mean of the log-normalisers)."""
             coefficients = _component_coefficients(*params, unit=unit)
-
-            def block(rows, out):
-                rho, total, log_norm[rows] = _e_step_block(features, coefficients, rows, out)
-                return _m_step_sums(rho, table[rows, :10], mstep_weights[rows] / total)
-
-            def screened_block(rows, out):  # the same, fused in one kernel over the pairs within the screen
-                return screened_e_step_sums(features[rows], transposed, table[rows, :10], mstep_weights[rows],
-                                            float(self.screen), log_norm[rows])
-            if self.screen is not None:
+            if self.screen is None:
+                def block(rows, out):
+                    rho, total, log_norm[rows] = _e_step_block(features, coefficients, rows, out)
+                    return _m_step_sums(rho, table[rows, :10], mstep_weights[rows] / total)
+            else:  # the same in one kernel, over the pairs within the screen
                 transposed = np.ascontiguousarray(coefficients.T)
-            sums = blocks.run(block if self.screen is None else screened_block)
+
+                def block(rows, out):
+                    return screened_e_step_sums(features[rows], transposed, table[rows, :10], mstep_weights[rows],
+                                                float(self.screen), log_norm[rows])
+            sums = blocks.run(block)
             return sums, np.dot(mstep_weights, log_norm) / mstep_weights.sum()
 
         with BlockPass(len(prims), self.n_components, self.memory_limit, self.n_jobs) as blocks:
