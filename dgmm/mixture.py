@@ -590,8 +590,6 @@ class GaussianMixture(BaseEstimator):
         reg_covar = self.reg_covar / unit**2
         rng = np.random.default_rng(self.random_state)
         log_norm = np.empty(len(prims))
-        if self.screen is not None:
-            from dgmm.compiled.e_step import screened_e_step_sums  # numba loads only for screened fits
 
         def e_step(params, blocks):
             """E-step block by block: the M-step sums of its responsibilities and the bound (size-weighted
@@ -602,6 +600,7 @@ class GaussianMixture(BaseEstimator):
                     rho, total, log_norm[rows] = _e_step_block(features, coefficients, rows, out)
                     return _m_step_sums(rho, table[rows, :10], mstep_weights[rows] / total)
             else:  # the same in one kernel, over the pairs within the screen
+                from dgmm.compiled.e_step import screened_e_step_sums  # numba loads only for screened fits
                 transposed = np.ascontiguousarray(coefficients.T)
 
                 def block(rows, out):

@@ -1,7 +1,8 @@
 """numba kernels of the library's hot loops, each tested against the numpy code it replaces.
 
-- :mod:`~dgmm.compiled.e_step`: EM's E-step exponentials with the far pairs screened out
-  (``GaussianMixture(screen=...)``, the odometry frames' fits);
+- :mod:`~dgmm.compiled.e_step`: a screened fit's E-step and M-step sums in one pass, and the screened
+  exponentials of its responsibilities, the far pairs left out (``GaussianMixture(screen=...)``, the odometry
+  frames' fits);
 - :mod:`~dgmm.compiled.registration`: the P2D and D2D costs and their derivatives for the
   Gauss-Newton solver (``register_p2d`` / ``register_d2d(solver="gauss-newton")``, odometry's registrations).
 
