@@ -85,6 +85,43 @@ def p2d_cost(params, points, centre, mixture, with_grad):
     return cost, np.concatenate([grad_moved.sum(axis=0), grad_quaternion])
 
 
+def p2d_params_cost(points, centre, mixture, compiled=True):
+    """The P2D cost as :func:`~dgmm.registration.solvers.minimise_bfgs` evaluates it.
+
+    Parameters
+    ----------
+    points : ndarray of shape (n_points, 3)
+    centre : ndarray of shape (3,)
+    mixture : FittedMixture
+    compiled : bool, default=True
+        The numba kernels of :mod:`~dgmm.compiled.registration` (the pairs within its screen), or :func:`p2d_cost`
+        (every pair; the reference in tests, and the timing checks' numpy P2D).
+
+    Returns
+    -------
+    cost : callable
+        ``cost(params, with_grad)``, :func:`p2d_cost` for these points.
+    """
+    if not compiled:
+        return partial(p2d_cost, points=points, centre=centre, mixture=mixture)
+    from dgmm.compiled import registration as kernels  # numba loads only where P2D runs
+
+    local = np.ascontiguousarray(points - centre)
+    table, precisions = mixture.log_density_table, mixture.precisions
+    precision_means = np.ascontiguousarray(mixture.moment_table[:, 9:])
+    buffers = kernels.p2d_pose_buffers(len(local), table.shape[1])  # BFGS takes the gradient before the next pose
+
+    def cost(params, with_grad):
+        rotation, jacobian = kernels.quaternion_rotation_and_jacobian(params[3:])
+        value = kernels.p2d_negative_mean_log_likelihood(local, rotation, centre + params[:3] - mixture.origin, table,
+                                                         *buffers)
+        if not with_grad:
+            return value
+        return value, kernels.p2d_params_gradient(precisions, precision_means, local, jacobian, *buffers[1:])
+
+    return cost
+
+
 def p2d_pose_cost(points, centre, mixture, compiled=True):
     """The P2D cost as :func:`~dgmm.registration.solvers.minimise_gauss_newton` evaluates it.
 
@@ -148,7 +185,7 @@ def _compiled_pose_cost(local, centre, mixture):
     return evaluate
 
 
-def register_p2d(source, mixture, gradient="analytic", callback=None, options=None, solver="bfgs"):
+def register_p2d(source, mixture, gradient="analytic", callback=None, options=None, solver="bfgs", compiled=True):
     """Point-to-distribution registration: maximise the mean log-likelihood of the moved source points.
 
     From the identity, rotating about the source centroid (paper §VI-A).
@@ -171,6 +208,9 @@ def register_p2d(source, mixture, gradient="analytic", callback=None, options=No
     solver : {"bfgs", "gauss-newton"}, default="bfgs"
         The paper's BFGS over a translation and a quaternion, or damped Gauss-Newton steps on 6 dof with the
         responsibilities refreshed every step (several times faster, same optimum).
+    compiled : bool, default=True
+        The cost and its derivatives from the numba kernels of :mod:`~dgmm.compiled.registration`, or from numpy
+        (:func:`p2d_cost`, :func:`p2d_pose_cost` ``(compiled=False)``): the same cost to rounding.
 
     Returns
     -------
@@ -183,7 +223,7 @@ def register_p2d(source, mixture, gradient="analytic", callback=None, options=No
     centre = points.mean(axis=0)
     length = TRANSLATION_UNIT * np.sqrt(np.mean(np.sum((points - centre) ** 2, axis=1)))
     if solver == "gauss-newton":
-        return minimise_gauss_newton("p2d", p2d_pose_cost(points, centre, mix), centre, length / TRANSLATION_UNIT,
-                                     np.eye(3), np.zeros(3), callback, options)
-    cost = partial(p2d_cost, points=points, centre=centre, mixture=mix)
-    return minimise_bfgs("p2d", cost, centre, length, IDENTITY_PARAMS, gradient, callback, options)
+        return minimise_gauss_newton("p2d", p2d_pose_cost(points, centre, mix, compiled), centre,
+                                     length / TRANSLATION_UNIT, np.eye(3), np.zeros(3), callback, options)
+    return minimise_bfgs("p2d", p2d_params_cost(points, centre, mix, compiled), centre, length, IDENTITY_PARAMS,
+                         gradient, callback, options)

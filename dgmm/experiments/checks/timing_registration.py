@@ -6,8 +6,9 @@
   random rigid motion per repeat;
 - ``cpd vs p2d`` (§VI-A: "We adjusted pyCPD to run for 150 iterations to approximately match the run-time of our
   P2D GMM registration"): on each of the first Fig 5 trials, pycpd's rigid CPD (``cpd``, the paper's), dgmm's
-  operation-for-operation copy of it that the sweep runs (``cpd dgmm``), P2D as the sweep runs it (``p2d``) and P2D
-  with BFGS's forward differences, the paper's (``p2d numerical``), all onto the trial's mixture and target points.
+  operation-for-operation copy of it that the sweep runs (``cpd dgmm``), P2D as the sweep runs it (``p2d``, numba
+  kernels) and P2D with BFGS's forward differences on the numpy cost, the paper's (``p2d numerical``: numpy beside
+  pycpd's numpy), all onto the trial's mixture and target points.
 """
 import numpy as np
 from pycpd import RigidRegistration
@@ -133,7 +134,7 @@ def cpd_p2d_times(mesh, dense, gmm, *, repeats, root_seed, key, max_angle_deg, m
         "cpd": lambda case: register_pycpd(case[1], case[0].target, **cpd),
         "cpd dgmm": lambda case: register_cpd(case[1], case[0].target, **cpd),
         "p2d": lambda case: register_p2d(case[1], gmm, gradient=gradient),
-        "p2d numerical": lambda case: register_p2d(case[1], gmm, gradient="numeric"),
+        "p2d numerical": lambda case: register_p2d(case[1], gmm, gradient="numeric", compiled=False),
     }
 
     def describe(case, setting, result):
