@@ -195,3 +195,17 @@ def test_jobs_run_with_one_blas_thread_whatever_their_environment(server, tmp_pa
         assert (run.returncode, run.stdout) == (0, "[1]\n"), run.stderr
     finally:
         server.stop()
+
+
+def test_a_preloaded_function_runs_once_in_the_server_before_its_jobs(server, tmp_path):
+    """``"module:function"`` imports the module and calls the function in the server: its forks inherit what it
+    loaded (the sweep loads P2D's compiled kernels so)."""
+    server.stop()
+    (tmp_path / "probe.py").write_text("import os\nLOADED_BY = []\n\ndef load():\n    LOADED_BY.append(os.getpid())\n")
+    server = JobServer(["probe:load"]).start()
+    try:
+        job = script(tmp_path, "loaded.py", "import probe\nprint(probe.LOADED_BY)\n")
+        runs = [subprocess.run([sys.executable, job], capture_output=True, text=True, timeout=60) for _ in range(2)]
+        assert [(run.returncode, run.stdout) for run in runs] == [(0, f"[{server._process.pid}]\n")] * 2
+    finally:
+        server.stop()

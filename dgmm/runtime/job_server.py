@@ -101,7 +101,8 @@ class JobServer:
     Parameters
     ----------
     preload : list of str
-        Modules the server imports for its forks.
+        Modules the server imports for its forks; ``"module:function"`` also calls ``function()`` of the module once
+        imported (loading compiled code, say, that every fork would otherwise load for itself).
     """
 
     def __init__(self, preload):
@@ -137,7 +138,10 @@ def serve(address, preload):
     listener.bind(address)
     listener.listen(64)  # requests queue here while the imports run
     for name in preload:
-        importlib.import_module(name)
+        module, _, function = name.partition(":")
+        loaded = importlib.import_module(module)
+        if function:
+            getattr(loaded, function)()
     parent = os.getppid()
     selector = selectors.DefaultSelector()
     selector.register(listener, selectors.EVENT_READ)
