@@ -12,7 +12,7 @@ import pytest
 from dgmm.experiments.shared_responsibility import PER_POINT_MEASURE
 from dgmm.runtime.tables import read_csv
 from tests.test_recording import read_blueprint, read_mcap, read_rrd
-from tests.workflow import RERUN, TABLE_SHA256, TEST_CONFIG, run_snakemake, sha256, snakemake_command
+from tests.workflow import RERUN, TEST_CONFIG, assert_recorded_table, run_snakemake, snakemake_command
 
 pytestmark = pytest.mark.slow
 
@@ -52,7 +52,7 @@ def test_likelihoods_reproduce_the_paper_on_bunny_res4(sweep):
 
 
 def test_likelihood_table_bytes_are_the_recorded_ones(sweep):
-    assert sha256(sweep / "tables" / "likelihood.csv") == TABLE_SHA256["likelihood.csv"]
+    assert_recorded_table(sweep / "tables" / "likelihood.csv")
 
 
 def test_every_recording_reads_back_and_matches_the_table(sweep):
