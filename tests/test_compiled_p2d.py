@@ -1,6 +1,8 @@
 """The compiled P2D kernels (dgmm.compiled.registration) against the numpy reference (every pair, numpy's exp):
 costs, derivatives and the poses of both solvers; the central-difference tests of test_registration.py check the
 compiled derivatives on their own."""
+import subprocess
+import sys
 from types import SimpleNamespace
 
 import numpy as np
@@ -125,3 +127,31 @@ def test_bfgs_poses_equal_the_numpy_path(bunny_mixture):
         ours, theirs = (reg.register_p2d(trial.apply(vertices), mixture, compiled=c) for c in (True, False))
         assert np.radians(reg.rotation_distance_deg(ours.rotation, theirs.rotation)) < 1e-7
         assert np.abs(ours.translation - theirs.translation).max() < 1e-7 * diagonal
+
+
+def test_loading_the_kernels_leaves_nothing_for_a_registration_to_load():
+    """What the sweep's job server calls before forking its jobs (dgmm.compiled.load_p2d_kernels) loads every kernel
+    specialisation that P2D's solvers then run on a fitted scikit-learn mixture: a fresh process, so that no other
+    test has loaded them first."""
+    program = """
+import numpy as np
+from sklearn.mixture import GaussianMixture
+from dgmm.compiled import load_p2d_kernels, registration as kernels
+from dgmm.registration import register_p2d, register_p2d_coarse_to_fine
+load_p2d_kernels()
+names = [name for name in dir(kernels) if hasattr(getattr(kernels, name), "signatures")]
+loaded = {name: list(getattr(kernels, name).signatures) for name in names}
+points = np.random.default_rng(0).normal(size=(200, 3))
+mixture = GaussianMixture(5, random_state=0).fit(points)
+for solver in ("bfgs", "gauss-newton"):
+    register_p2d(points[::-1] + 0.01, mixture, solver=solver)
+register_p2d_coarse_to_fine(points + 0.01, mixture, scales=[0.25, 0.0])
+print(sorted(name for name in names if loaded[name]))
+print([name for name in names if list(getattr(kernels, name).signatures) != loaded[name]])
+"""
+    run = subprocess.run([sys.executable, "-c", program], capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stderr
+    loaded, added = run.stdout.splitlines()
+    assert loaded == str(["p2d_negative_mean_log_likelihood", "p2d_params_gradient", "p2d_pose_derivatives",
+                          "quaternion_rotation_and_jacobian"])
+    assert added == "[]"
