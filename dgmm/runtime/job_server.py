@@ -11,8 +11,10 @@ and ends its fork. Without a server (a script run by hand, a cluster node) ``han
 runs where it is. The fork runs the same interpreter and libraries on the same inputs, so results are bit for
 bit those of a fresh process.
 
-The server never computes: a fork of a process whose thread pools (OpenMP, BLAS) have run would inherit
-them broken, so it only imports, with BLAS and OpenMP at one thread as a one-thread job has them.
+The server computes next to nothing: a fork of a process whose thread pools (OpenMP, BLAS) have run would inherit
+them broken, so it imports, with BLAS and OpenMP at one thread as a one-thread job has them, and runs only the
+preload's functions (the sweep's: one tiny P2D registration that loads numba's compiled kernels, which start no
+threads).
 """
 from __future__ import annotations
 
