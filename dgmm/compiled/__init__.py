@@ -27,4 +27,3 @@ def load_p2d_kernels():
     points = np.array([[0.1, 0.0, 0.0], [0.9, 0.1, 0.0], [0.0, 0.1, 0.1], [1.0, 0.0, 0.1]])
     for solver in ("bfgs", "gauss-newton"):
         register_p2d(points, mixture, solver=solver)
-

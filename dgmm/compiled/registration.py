@@ -1,11 +1,10 @@
 """The P2D and D2D costs and their derivatives compiled with numba: P2D for both solvers, D2D for Gauss-Newton.
 
-- P2D (:func:`dgmm.registration.p2d.p2d_pose_cost` for Gauss-Newton, :func:`~dgmm.registration.p2d.p2d_params_cost`
-  for BFGS) spends its time in the likelihood of every trial pose:
-  ``n_points x n_components`` exponentials. A point's responsibility ``e^{l_nk - max_k l_nk}`` under a component more
-  than :data:`SCREEN` nats below its best adds less than half a unit in the last place to the point's sum (which is at
-  least 1), so the P2D kernels compute every log-density (10 multiply-adds) but the exponential and the moments only
-  of the pairs within :data:`SCREEN`.
+- P2D (:func:`dgmm.registration.p2d.p2d_pose_cost` for Gauss-Newton, :func:`~dgmm.registration.p2d.p2d_params_cost` for
+  BFGS) spends its time in the likelihood of every trial pose: ``n_points x n_components`` exponentials. A point's
+  responsibility ``e^{l_nk - max_k l_nk}`` under a component more than :data:`SCREEN` nats below its best adds less than
+  half a unit in the last place to the point's sum (which is at least 1), so the P2D kernels compute every log-density
+  (10 multiply-adds) but the exponential and the moments only of the pairs within :data:`SCREEN`.
 - D2D (:func:`dgmm.registration.d2d.d2d_pose_cost`, odometry's inner loop): the numpy D2D bounds every pair's term
   before computing the ones that may matter, then works on arrays of a few hundred to a few thousand pairs, and at
   odometry's sizes (K = 100 per frame) its time goes to numpy's per-call overhead. Here every pair's exact term is
@@ -13,9 +12,9 @@
   ``e^-negligible`` of the largest term, the pairs the numpy derivatives keep.
 
 The numpy functions stay the reference (``p2d_pose_cost(compiled=False)``, ``p2d_params_cost(compiled=False)``,
-``d2d_pose_cost(compiled=False)``, tested against these). The kernels and the 3x3 helpers they call live in this one file, and the registration
-modules' thresholds come in as arguments: numba's on-disk cache checks only the file of the function it compiled,
-so a helper or a constant in another file could change without the cached code noticing.
+``d2d_pose_cost(compiled=False)``, tested against these). The kernels and the 3x3 helpers they call live in this one
+file, and the registration modules' thresholds come in as arguments: numba's on-disk cache checks only the file of the
+function it compiled, so a helper or a constant in another file could change without the cached code noticing.
 """
 from __future__ import annotations
 
