@@ -59,11 +59,11 @@ def platform():
 
 def assert_recorded_table(path):
     """The table at ``path`` has the bytes recorded for this platform; skipped where none are recorded."""
-    recorded = TABLE_SHA256.get(platform(), {}).get(Path(path).name)
+    name, here, got = Path(path).name, platform(), sha256(path)
+    recorded = TABLE_SHA256.get(here, {}).get(name)
     if recorded is None:
-        pytest.skip(f"no {Path(path).name} recorded for {platform()}; its sha256 here: {sha256(path)}")
-    got = sha256(path)
-    assert got == recorded, f"{Path(path).name} on {platform()}: sha256 {got}, recorded {recorded}"
+        pytest.skip(f"no {name} recorded for {here}; its sha256 here: {got}")
+    assert got == recorded, f"{name} on {here}: sha256 {got}, recorded {recorded}"
 
 
 def snakemake_command(workdir, *targets, configfile=TEST_CONFIG_FILE):

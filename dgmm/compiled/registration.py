@@ -136,6 +136,16 @@ def p2d_negative_mean_log_likelihood(local, rotation, shift, table, rotated, off
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
+def _pair_gradient(precisions, precision_means, k, d0, d1, d2):
+    """``g_nk = P_k (y_n - μ_k)`` (three scalars) from the offset ``d = y_n - origin``, by ``P_k``'s upper entries."""
+    p00, p01, p02 = precisions[k, 0, 0], precisions[k, 0, 1], precisions[k, 0, 2]
+    p11, p12, p22 = precisions[k, 1, 1], precisions[k, 1, 2], precisions[k, 2, 2]
+    return (p00 * d0 + p01 * d1 + p02 * d2 - precision_means[k, 0],
+            p01 * d0 + p11 * d1 + p12 * d2 - precision_means[k, 1],
+            p02 * d0 + p12 * d1 + p22 * d2 - precision_means[k, 2])
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
 def p2d_pose_derivatives(precisions, precision_means, rotated, offsets, starts, components, terms, sums):
     """Gradient, Gauss-Newton matrix and exact Hessian over ``(δ, ω)`` of the cost at the pose of ``offsets``
     (what :func:`~dgmm.registration.p2d.p2d_pose_cost`'s ``derivatives()`` returns), from the screened pairs
@@ -178,9 +188,7 @@ def p2d_pose_derivatives(precisions, precision_means, rotated, offsets, starts, 
             k, r = components[i], terms[i] / sums[n]
             p00, p01, p02 = precisions[k, 0, 0], precisions[k, 0, 1], precisions[k, 0, 2]
             p11, p12, p22 = precisions[k, 1, 1], precisions[k, 1, 2], precisions[k, 2, 2]
-            g0 = p00 * d0 + p01 * d1 + p02 * d2 - precision_means[k, 0]
-            g1 = p01 * d0 + p11 * d1 + p12 * d2 - precision_means[k, 1]
-            g2 = p02 * d0 + p12 * d1 + p22 * d2 - precision_means[k, 2]
+            g0, g1, g2 = _pair_gradient(precisions, precision_means, k, d0, d1, d2)
             m0 += r * g0
             m1 += r * g1
             m2 += r * g2
@@ -272,13 +280,11 @@ def p2d_params_gradient(precisions, precision_means, local, jacobian, offsets, s
         d0, d1, d2 = offsets[n, 0], offsets[n, 1], offsets[n, 2]
         m0 = m1 = m2 = 0.0
         for i in range(starts[n], starts[n + 1]):
-            k, r = components[i], terms[i] / sums[n]
-            m0 += r * (precisions[k, 0, 0] * d0 + precisions[k, 0, 1] * d1 + precisions[k, 0, 2] * d2
-                       - precision_means[k, 0])
-            m1 += r * (precisions[k, 1, 0] * d0 + precisions[k, 1, 1] * d1 + precisions[k, 1, 2] * d2
-                       - precision_means[k, 1])
-            m2 += r * (precisions[k, 2, 0] * d0 + precisions[k, 2, 1] * d1 + precisions[k, 2, 2] * d2
-                       - precision_means[k, 2])
+            r = terms[i] / sums[n]
+            g0, g1, g2 = _pair_gradient(precisions, precision_means, components[i], d0, d1, d2)
+            m0 += r * g0
+            m1 += r * g1
+            m2 += r * g2
         gradient[0] += m0
         gradient[1] += m1
         gradient[2] += m2

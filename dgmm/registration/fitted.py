@@ -125,6 +125,11 @@ class FittedMixture:
         return np.column_stack([p.reshape(-1, 9), np.einsum("kab,kb->ka", p, self.means - self.origin)])
 
     @cached_property
+    def precision_means(self):
+        """``P_k (μ_k - origin)``, the moment table's last three columns, contiguous, (n_components, 3)."""
+        return np.ascontiguousarray(self.moment_table[:, 9:])
+
+    @cached_property
     def gradient_outer_table(self):
         """Coefficients of ``g gᵀ`` (6 distinct entries), ``g = P_k (d - m_k)``, on :func:`quadratic_features` of
         ``d``, shape (n_components, 60): responsibilities times it, contracted with the features, give each

@@ -107,8 +107,7 @@ def p2d_params_cost(points, centre, mixture, compiled=True):
     from dgmm.compiled import registration as kernels  # numba loads only where P2D runs
 
     local = np.ascontiguousarray(points - centre)
-    table, precisions = mixture.log_density_table, mixture.precisions
-    precision_means = np.ascontiguousarray(mixture.moment_table[:, 9:])
+    table = mixture.log_density_table
     buffers = kernels.p2d_pose_buffers(len(local), table.shape[1])  # BFGS takes the gradient before the next pose
 
     def cost(params, with_grad):
@@ -117,7 +116,8 @@ def p2d_params_cost(points, centre, mixture, compiled=True):
                                                          *buffers)
         if not with_grad:
             return value
-        return value, kernels.p2d_params_gradient(precisions, precision_means, local, jacobian, *buffers[1:])
+        return value, kernels.p2d_params_gradient(mixture.precisions, mixture.precision_means, local, jacobian,
+                                                  *buffers[1:])
 
     return cost
 
@@ -171,16 +171,15 @@ def _compiled_pose_cost(local, centre, mixture):
     """:func:`p2d_pose_cost` with the numba kernels."""
     from dgmm.compiled import registration as kernels  # numba loads only where Gauss-Newton P2D runs
 
-    table, precisions = mixture.log_density_table, mixture.precisions
+    table = mixture.log_density_table
     buffers_shape = (len(local), table.shape[1])
-    precision_means = np.ascontiguousarray(mixture.moment_table[:, 9:])
     local = np.ascontiguousarray(local)
 
     def evaluate(rotation, translation):
         buffers = kernels.p2d_pose_buffers(*buffers_shape)
         cost = kernels.p2d_negative_mean_log_likelihood(local, rotation, centre + translation - mixture.origin,
                                                         table, *buffers)
-        return cost, partial(kernels.p2d_pose_derivatives, precisions, precision_means, *buffers)
+        return cost, partial(kernels.p2d_pose_derivatives, mixture.precisions, mixture.precision_means, *buffers)
 
     return evaluate
 
