@@ -69,19 +69,10 @@ SCREEN = 50.0
 """Pairs with ``l_nk < max_k l_nk - SCREEN`` are left out: ``e^-50 ~ 2e-22``, so even 10⁵ of them add under
 ``2e-17`` to a sum of at least 1, below half its last place (``1.1e-16``)."""
 
-
-@numba.njit(cache=True, nogil=True, error_model="numpy")
-def _log_densities(offset, table, out):
-    """``quadratic_features(offset) @ table`` for one offset (3,) into ``out`` (n_components,); returns its max."""
-    x, y, z = offset[0], offset[1], offset[2]
-    xx, yy, zz, xy, xz, yz = x * x, y * y, z * z, x * y, x * z, y * z
-    for k in range(out.shape[0]):  # one expression per component: the loop vectorises
-        out[k] = (xx * table[0, k] + yy * table[1, k] + zz * table[2, k] + xy * table[3, k] + xz * table[4, k]
-                  + yz * table[5, k] + x * table[6, k] + y * table[7, k] + z * table[8, k] + table[9, k])
-    top = -np.inf
-    for k in range(out.shape[0]):
-        top = max(top, out[k])
-    return top
+BLOCK = 32
+"""Points whose log-densities :func:`p2d_negative_mean_log_likelihood` computes together: the loop over a block's
+points vectorises with each component's 10 coefficients held in registers. One bunny cost (453 points, K=100, AVX-512)
+took 122, 61, 60 and 62 µs with blocks of 8, 16, 32 and 64 points, and 101 µs point by point over the components."""
 
 
 def p2d_pose_buffers(n_points, n_components):
@@ -98,6 +89,11 @@ def p2d_negative_mean_log_likelihood(local, rotation, shift, table, rotated, off
                                      sums):
     """``-1/n Σ_n log Σ_k π_k N(y_n | μ_k, Σ_k)`` of the points ``y_n = R x_n + shift + origin``.
 
+    A block of :data:`BLOCK` points at a time: their :func:`~dgmm.registration.fitted.quadratic_features`, every
+    log-density ``l_nk`` (the features times the table's column, summed in the table's row order: a point's values do
+    not depend on its block) and each point's largest; then, point by point, the pairs within :data:`SCREEN`, in
+    component order.
+
     Parameters
     ----------
     local : ndarray of shape (n_points, 3)
@@ -112,27 +108,53 @@ def p2d_negative_mean_log_likelihood(local, rotation, shift, table, rotated, off
         the pairs within :data:`SCREEN`: point ``n``'s are ``components[starts[n]:starts[n + 1]]``, with
         ``e^{l_nk - max_k l_nk}`` in ``terms`` and their sum in ``sums[n]``.
     """
-    log_density = np.empty(table.shape[1])
+    n_points, n_components = local.shape[0], table.shape[1]
+    features = np.empty((9, BLOCK))
+    log_density = np.empty((n_components, BLOCK))
+    tops = np.empty(BLOCK)
     total = 0.0
     count = 0
-    for n in range(local.shape[0]):
-        for a in range(3):
-            rotated[n, a] = rotation[a, 0] * local[n, 0] + rotation[a, 1] * local[n, 1] + rotation[a, 2] * local[n, 2]
-            offsets[n, a] = rotated[n, a] + shift[a]
-        top = _log_densities(offsets[n], table, log_density)
-        starts[n] = count
-        threshold = top - SCREEN
-        for k in range(log_density.shape[0]):  # branch-free: every index is written, the kept ones advance
-            components[count] = k
-            count += log_density[k] > threshold
-        sum_ = 0.0
-        for i in range(starts[n], count):
-            terms[i] = math.exp(log_density[components[i]] - top)
-            sum_ += terms[i]
-        sums[n] = sum_
-        total += math.log(sum_) + top
-    starts[local.shape[0]] = count
-    return -total / local.shape[0]
+    for first in range(0, n_points, BLOCK):
+        size = min(BLOCK, n_points - first)
+        features[:] = 0.0  # a last, partial block computes its unused columns on zeros
+        for j in range(size):
+            n = first + j
+            for a in range(3):
+                rotated[n, a] = (rotation[a, 0] * local[n, 0] + rotation[a, 1] * local[n, 1]
+                                 + rotation[a, 2] * local[n, 2])
+                offsets[n, a] = rotated[n, a] + shift[a]
+            x, y, z = offsets[n, 0], offsets[n, 1], offsets[n, 2]
+            features[0, j], features[1, j], features[2, j] = x * x, y * y, z * z
+            features[3, j], features[4, j], features[5, j] = x * y, x * z, y * z
+            features[6, j], features[7, j], features[8, j] = x, y, z
+        tops[:] = -np.inf
+        for k in range(n_components):
+            t0, t1, t2, t3, t4 = table[0, k], table[1, k], table[2, k], table[3, k], table[4, k]
+            t5, t6, t7, t8, t9 = table[5, k], table[6, k], table[7, k], table[8, k], table[9, k]
+            for j in range(BLOCK):
+                value = (features[0, j] * t0 + features[1, j] * t1 + features[2, j] * t2 + features[3, j] * t3
+                         + features[4, j] * t4 + features[5, j] * t5 + features[6, j] * t6 + features[7, j] * t7
+                         + features[8, j] * t8 + t9)
+                log_density[k, j] = value
+                tops[j] = max(tops[j], value)
+        for j in range(size):
+            n = first + j
+            top = tops[j]
+            threshold = top - SCREEN
+            starts[n] = count
+            for k in range(n_components):
+                if log_density[k, j] > threshold:
+                    components[count] = k
+                    terms[count] = log_density[k, j]
+                    count += 1
+            sum_ = 0.0
+            for i in range(starts[n], count):
+                terms[i] = math.exp(terms[i] - top)
+                sum_ += terms[i]
+            sums[n] = sum_
+            total += math.log(sum_) + top
+    starts[n_points] = count
+    return -total / n_points
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
