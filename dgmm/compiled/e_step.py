@@ -41,11 +41,18 @@ def exp_shifted_screened(log_rho, screen):
     return peak, total
 
 
+BLOCK = 32
+"""Primitives whose ``log rho`` :func:`screened_e_step_sums` computes together: the loop over a block's primitives
+vectorises with each component's 11 coefficients held in registers (as the P2D cost's,
+:data:`dgmm.compiled.registration.BLOCK`)."""
+
+
 @numba.njit(cache=True, nogil=True, error_model="numpy")
 def screened_e_step_sums(features, coefficients, moments, row_weights, screen, log_norm):
-    """One block of a screened fit's E-step fused with its M-step sums, primitive by primitive: ``log rho`` of every
-    component, the exponentials of the pairs within ``e^-screen`` of the primitive's best, its log-normaliser, and
-    the kept pairs' responsibilities times its weighted moments.
+    """One block of a screened fit's E-step fused with its M-step sums: ``log rho`` of every (component, primitive)
+    pair, :data:`BLOCK` primitives at a time (summed in the coefficients' row order: a primitive's values do not
+    depend on its block); then primitive by primitive the exponentials of the pairs within ``e^-screen`` of its best,
+    its log-normaliser, and the kept pairs' responsibilities times its weighted moments.
 
     Parameters
     ----------
@@ -66,35 +73,48 @@ def screened_e_step_sums(features, coefficients, moments, row_weights, screen, l
     sums : ndarray of shape (n_components, 10)
         ``dgmm.mixture._m_step_sums`` of the block's responsibilities.
     """
-    n_components = coefficients.shape[1]
+    n_rows, n_components = features.shape[0], coefficients.shape[1]
     sums = np.zeros((n_components, 10))
-    log_rho, terms = np.empty(n_components), np.empty(n_components)
+    block_features = np.zeros((11, BLOCK))  # a last, partial block computes its unused columns on zeros
+    log_rho = np.empty((n_components, BLOCK))
+    peaks = np.empty(BLOCK)
+    terms = np.empty(n_components)
     kept = np.empty(n_components, dtype=np.int64)
     row = np.empty(10)
-    for j in range(features.shape[0]):
-        f = features[j]
-        peak = -np.inf
-        for k in range(n_components):  # one expression per component: the loop vectorises
-            log_rho[k] = (f[0] * coefficients[0, k] + f[1] * coefficients[1, k] + f[2] * coefficients[2, k]
-                          + f[3] * coefficients[3, k] + f[4] * coefficients[4, k] + f[5] * coefficients[5, k]
-                          + f[6] * coefficients[6, k] + f[7] * coefficients[7, k] + f[8] * coefficients[8, k]
-                          + f[9] * coefficients[9, k] + f[10] * coefficients[10, k])
+    for first in range(0, n_rows, BLOCK):
+        size = min(BLOCK, n_rows - first)
+        for j in range(size):
+            for c in range(11):
+                block_features[c, j] = features[first + j, c]
+        peaks[:] = -np.inf
         for k in range(n_components):
-            peak = max(peak, log_rho[k])
-        count = 0
-        for k in range(n_components):  # branch-free: every index is written, the kept ones advance
-            kept[count] = k
-            count += log_rho[k] - peak > -screen
-        total = 0.0
-        for i in range(count):
-            terms[i] = math.exp(log_rho[kept[i]] - peak)
-            total += terms[i]
-        log_norm[j] = peak + math.log(total)
-        factor = row_weights[j] / total
-        for c in range(10):
-            row[c] = moments[j, c] * factor
-        for i in range(count):
-            k, term = kept[i], terms[i]
+            c0, c1, c2, c3 = coefficients[0, k], coefficients[1, k], coefficients[2, k], coefficients[3, k]
+            c4, c5, c6, c7 = coefficients[4, k], coefficients[5, k], coefficients[6, k], coefficients[7, k]
+            c8, c9, c10 = coefficients[8, k], coefficients[9, k], coefficients[10, k]
+            for j in range(BLOCK):
+                value = (block_features[0, j] * c0 + block_features[1, j] * c1 + block_features[2, j] * c2
+                         + block_features[3, j] * c3 + block_features[4, j] * c4 + block_features[5, j] * c5
+                         + block_features[6, j] * c6 + block_features[7, j] * c7 + block_features[8, j] * c8
+                         + block_features[9, j] * c9 + block_features[10, j] * c10)
+                log_rho[k, j] = value
+                peaks[j] = max(peaks[j], value)
+        for j in range(size):
+            peak = peaks[j]
+            count = 0
+            for k in range(n_components):
+                if log_rho[k, j] - peak > -screen:
+                    kept[count] = k
+                    count += 1
+            total = 0.0
+            for i in range(count):
+                terms[i] = math.exp(log_rho[kept[i], j] - peak)
+                total += terms[i]
+            log_norm[first + j] = peak + math.log(total)
+            factor = row_weights[first + j] / total
             for c in range(10):
-                sums[k, c] += term * row[c]
+                row[c] = moments[first + j, c] * factor
+            for i in range(count):
+                k, term = kept[i], terms[i]
+                for c in range(10):
+                    sums[k, c] += term * row[c]
     return sums
