@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from dgmm import GaussianMixture, Primitives
-from dgmm.compiled.e_step import exp_shifted_screened
+from dgmm.compiled.e_step import BLOCK, exp_shifted_screened, screened_e_step_sums
 from dgmm.mixture import EStep
 
 
@@ -53,3 +53,29 @@ def test_screened_responsibilities_are_the_unscreened_ones_to_rounding(bunny_res
     assert np.mean(screened == 0) > 0.5
     np.testing.assert_allclose(screened, reference, rtol=0, atol=1e-15)
     assert np.abs(EStep(*params, screen=3).responsibilities(prims.means, prims.covariances) - reference).max() > 1e-3
+
+
+def test_a_primitives_sums_do_not_depend_on_its_block():
+    """The fused kernel computes ``log rho`` a block of primitives at a time: each primitive alone (a block of one)
+    gives its log-normaliser to the bit, and the block's M-step sums equal the sum of its primitives' alone to
+    rounding (and those of its kept pairs are numpy's)."""
+    rng = np.random.default_rng(2)
+    n_rows, n_components = BLOCK + 5, 40
+    features = np.column_stack([rng.normal(size=(n_rows, 10)), np.ones(n_rows)])
+    coefficients = np.ascontiguousarray(rng.normal(scale=30.0, size=(11, n_components)))
+    moments, row_weights = rng.normal(size=(n_rows, 10)), rng.random(n_rows)
+    log_norm = np.empty(n_rows)
+    sums = screened_e_step_sums(features, coefficients, moments, row_weights, 50.0, log_norm)
+    alone = np.empty((n_rows, n_components, 10))
+    for j in range(n_rows):
+        one = np.empty(1)
+        alone[j] = screened_e_step_sums(features[j:j + 1], coefficients, moments[j:j + 1], row_weights[j:j + 1],
+                                        50.0, one)
+        assert one[0] == log_norm[j]
+    np.testing.assert_allclose(sums, alone.sum(axis=0), rtol=0, atol=1e-13 * np.abs(sums).max())
+    log_rho = features @ coefficients
+    rho = np.exp(log_rho - log_rho.max(axis=1, keepdims=True))
+    rho[log_rho - log_rho.max(axis=1, keepdims=True) <= -50.0] = 0.0
+    expected = (rho * (row_weights / rho.sum(axis=1))[:, None]).T @ moments
+    np.testing.assert_allclose(sums, expected, rtol=0, atol=1e-12 * np.abs(expected).max())
+    np.testing.assert_allclose(log_norm, np.log(rho.sum(axis=1)) + log_rho.max(axis=1), rtol=1e-14)
