@@ -665,11 +665,20 @@ class GaussianMixture(BaseEstimator):
         return log_norm
 
     def score_samples(self, X):
-        """Log-likelihood of each point, shape (n_points,)."""
-        return self._log_norm(Primitives.from_points(X))
+        """Log-likelihood of each point, shape (n_points,).
+
+        ``X``: points (n_points, 3), or ``Primitives.from_points`` of them, so that a set scored under many mixtures
+        is checked and laid out once.
+        """
+        if not isinstance(X, Primitives):
+            return self._log_norm(Primitives.from_points(X))
+        if np.any(X.covariances):
+            raise InputError("score_samples takes points, and these primitives have covariances: use "
+                             "primitive_bounds or score_primitives")
+        return self._log_norm(X)
 
     def score(self, X, y=None):
-        """Mean log-likelihood of the points."""
+        """Mean log-likelihood of the points (``X`` as in :meth:`score_samples`)."""
         return _finite_mean(self.score_samples(X))
 
     def primitive_bounds(self, X):

@@ -161,6 +161,10 @@ def test_scores_of_many_points_do_not_depend_on_the_blocks(bunny_res4):
     np.testing.assert_allclose(scores, reference.score_samples(points), rtol=0, atol=1e-9)
     split = np.concatenate([gmm.score_samples(points[:1000]), gmm.score_samples(points[1000:])])
     assert np.array_equal(scores, split)
+    prepared = Primitives.from_points(points)  # an evaluation set built once for many mixtures: the same bits
+    assert np.array_equal(gmm.score_samples(prepared), scores) and gmm.score(prepared) == gmm.score(points)
+    with pytest.raises(InputError, match="score_samples takes points"):
+        gmm.score(Primitives.from_mesh(bunny_res4))
 
 
 def random_mesh(seed, n_faces):

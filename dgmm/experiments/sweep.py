@@ -82,6 +82,7 @@ def fit_seeds(prims, evaluation, *, n_components, init, variant, n_seeds, root_s
     """
     if variant not in VARIANTS:
         raise InputError(f"variant {variant!r}: must be one of {tuple(VARIANTS)}")
+    evaluation = Primitives.from_points(evaluation)  # checked and laid out once for the seeds' scores
     rows, seconds = [], []
     for index in range(n_seeds):
         model = GaussianMixture(n_components, init=init, max_iter=max_iter, tol=tol, reg_covar=reg_covar,

@@ -13,8 +13,8 @@ bit those of a fresh process.
 
 The server computes next to nothing: a fork of a process whose thread pools (OpenMP, BLAS) have run would inherit
 them broken, so it imports, with BLAS and OpenMP at one thread as a one-thread job has them, and runs only the
-preload's functions (the sweep's: one tiny P2D registration that loads numba's compiled kernels, which start no
-threads).
+preload's functions (the sweep's: one tiny P2D registration that loads numba's compiled kernels, and threadpoolctl's
+scan of the loaded libraries, which reads their thread counts; neither starts a thread).
 """
 from __future__ import annotations
 
