@@ -4,8 +4,9 @@ A job of the sweep runs in a fork of the job server (dgmm.runtime.job_server) wh
 imports first and times only what the job does after them: read the input mesh and the evaluation set, build the
 primitives, open the recordings (MCAP and rerun), fit the 10 seeds (recording every iteration), score each fit on
 the 50,000-point evaluation set (its primitives built once), close the recordings. The sweep profile counts the fits
-as the job's computation and the rest as its overhead. Scoring is timed twice more, one seed's mixture on the evaluation set: in the cache-
-sized blocks ``GaussianMixture.score`` uses, and in one block of all rows (as before, with 64k-row blocks).
+as the job's computation and the rest as its overhead. Scoring is timed twice more, one seed's mixture on the
+evaluation set: in the cache-sized blocks ``GaussianMixture.score`` uses, and in one block of all rows (as before,
+with 64k-row blocks).
 
 The evaluation set is a Poisson-disk sample of bunny res4 as the data stage draws it (dgmm.meshes.poisson_disk; a
 few seconds, not timed). Times are process CPU and wall; the load average is printed beside them.
