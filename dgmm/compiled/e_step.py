@@ -75,7 +75,7 @@ def screened_e_step_sums(features, coefficients, moments, row_weights, screen, l
     """
     n_rows, n_components = features.shape[0], coefficients.shape[1]
     sums = np.zeros((n_components, 10))
-    block_features = np.zeros((11, BLOCK))  # a last, partial block computes its unused columns on zeros
+    block_features = np.zeros((11, BLOCK))  # a last, partial block's unused columns: finite, their results unread
     log_rho = np.empty((n_components, BLOCK))
     peaks = np.empty(BLOCK)
     terms = np.empty(n_components)

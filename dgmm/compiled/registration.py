@@ -109,14 +109,13 @@ def p2d_negative_mean_log_likelihood(local, rotation, shift, table, rotated, off
         ``e^{l_nk - max_k l_nk}`` in ``terms`` and their sum in ``sums[n]``.
     """
     n_points, n_components = local.shape[0], table.shape[1]
-    features = np.empty((9, BLOCK))
+    features = np.zeros((9, BLOCK))  # a last, partial block's unused columns: finite values whose results go unread
     log_density = np.empty((n_components, BLOCK))
     tops = np.empty(BLOCK)
     total = 0.0
     count = 0
     for first in range(0, n_points, BLOCK):
         size = min(BLOCK, n_points - first)
-        features[:] = 0.0  # a last, partial block computes its unused columns on zeros
         for j in range(size):
             n = first + j
             for a in range(3):
