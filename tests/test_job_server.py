@@ -11,6 +11,9 @@ import pytest
 from dgmm.runtime.job_server import ADDRESS_VARIABLE, JobServer, script_imports
 
 HAND_OVER = "from dgmm.runtime.job_server import hand_over\nhand_over()\n"
+# A job that waits a minute in short sleeps: a Python signal handler runs between bytecodes, so one that lands just
+# before a single long sleep would wait out the minute (a race of the test's job, not of the server).
+WAIT = "for _ in range(6000):\n    time.sleep(0.01)\n"
 
 
 @pytest.fixture
@@ -59,11 +62,13 @@ def test_a_script_runs_in_a_fork_of_the_server_with_its_modules_loaded(server, t
 
 
 def test_without_a_server_the_script_runs_in_its_own_process(tmp_path, monkeypatch):
+    """... with the signal handling it had: hand_over's handlers and wakeup socket are undone."""
     (tmp_path / "probe.py").write_text("import os\nIMPORTED_BY = os.getpid()\n")
-    job = script(tmp_path, "job.py", "import os, probe\nprint(os.getpid() == probe.IMPORTED_BY)\n")
+    job = script(tmp_path, "job.py", "import os, probe, signal\nprint(os.getpid() == probe.IMPORTED_BY,"
+                                     " signal.getsignal(signal.SIGTERM) is signal.SIG_DFL, signal.set_wakeup_fd(-1))\n")
     env = {**os.environ, "PYTHONPATH": str(tmp_path), ADDRESS_VARIABLE: str(tmp_path / "no-such-socket")}
     run = subprocess.run([sys.executable, job], env=env, capture_output=True, text=True, timeout=60)
-    assert (run.returncode, run.stdout) == (0, "True\n")
+    assert (run.returncode, run.stdout) == (0, "True True -1\n")
 
 
 @pytest.mark.parametrize("body, code, stderr", [
@@ -85,7 +90,7 @@ def test_the_exit_status_and_error_are_the_script_s(server, tmp_path, body, code
 
 @pytest.mark.parametrize("how", ["interrupt", "kill"])
 def test_stopping_the_script_stops_its_fork(server, tmp_path, how):
-    job = script(tmp_path, "job.py", "import os, time\nprint(os.getpid(), flush=True)\ntime.sleep(60)\n")
+    job = script(tmp_path, "job.py", "import os, time\nprint(os.getpid(), flush=True)\n" + WAIT)
     client = subprocess.Popen([sys.executable, job], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     fork = int(client.stdout.readline())
     client.send_signal(signal.SIGINT if how == "interrupt" else signal.SIGKILL)
@@ -138,7 +143,7 @@ def test_termination_signals_reach_the_fork_as_themselves(server, tmp_path, numb
     """Snakemake cancels a job with SIGTERM (a closed terminal sends SIGHUP): the fork must get that very signal.
     Its handler here prints the number and exits 7, which must be the client's status. Without forwarding, the
     client dies of the signal itself (status -n) and the server's fallback sends the fork SIGTERM (tried)."""
-    client, fork = started_job(tmp_path, "time.sleep(60)\n", setup="signal.signal(signal.%s, lambda n, f: "
+    client, fork = started_job(tmp_path, WAIT, setup="signal.signal(signal.%s, lambda n, f: "
                                "(print('got', n), sys.exit(7)))\n" % signal.Signals(number).name)
     client.send_signal(number)
     code, out, _ = finish(client)
@@ -148,7 +153,7 @@ def test_termination_signals_reach_the_fork_as_themselves(server, tmp_path, numb
 
 @pytest.mark.parametrize("number", [signal.SIGTERM, signal.SIGHUP])
 def test_a_job_killed_by_a_termination_signal_kills_its_client_with_it(server, tmp_path, number):
-    client, fork = started_job(tmp_path, "time.sleep(60)\n")
+    client, fork = started_job(tmp_path, WAIT)
     client.send_signal(number)
     code, _, _ = finish(client)
     assert code == -number
@@ -158,7 +163,7 @@ def test_a_job_killed_by_a_termination_signal_kills_its_client_with_it(server, t
 def test_a_server_that_dies_under_a_job_fails_the_job_and_ends_the_fork(server, tmp_path):
     """The job did not finish, so its client must fail (status 1), never succeed; and the fork, orphaned, must not
     go on writing the job's outputs after Snakemake has counted it failed."""
-    client, fork = started_job(tmp_path, "time.sleep(60)\n")
+    client, fork = started_job(tmp_path, WAIT)
     server._process.kill()
     assert client.wait(timeout=10) == 1
     assert wait_dead(fork)

@@ -24,6 +24,7 @@ import importlib
 import json
 import os
 import runpy
+import select
 import selectors
 import shutil
 import signal
@@ -49,25 +50,35 @@ def hand_over():
         return
     connection = socket.socket(socket.AF_UNIX, socket.SOCK_SEQPACKET)
     request = dict(argv=[os.path.abspath(sys.argv[0]), *sys.argv[1:]], cwd=os.getcwd(), env=dict(os.environ))
-    # Signals are caught from before the request: one that comes before the fork's pid is known waits for it (the
-    # fork is already running the script), so none is lost to the client's default action.
-    fork, pending = [], []
-    handlers = {number: signal.signal(number, lambda number, frame: _signal(fork[0], number) if fork
-                                      else pending.append(number)) for number in _FORWARDED}
+    # Signals are caught from before the request and written to a wakeup socket, which the wait for the job's end
+    # watches beside the connection. Forwarding them from a handler would lose a race: a handler runs between
+    # bytecodes, so a signal landing just before a blocking recv would wait for the very job it was meant to end.
+    wakeup, woken = socket.socketpair()
+    wakeup.setblocking(False)
+    woken.setblocking(False)
+    handlers = {number: signal.signal(number, lambda number, frame: None) for number in _FORWARDED}
+    previous_wakeup = signal.set_wakeup_fd(woken.fileno(), warn_on_full_buffer=False)
     try:
         connection.connect(address)
         socket.send_fds(connection, [json.dumps(request).encode()], [0, 1, 2])
-        fork.append(int(connection.recv(32)))  # b"" (no fork made): ValueError
+        pid = int(connection.recv(32))  # b"" (no fork made): ValueError
     except (OSError, ValueError):  # no server here: nothing ran, so run the job in this process
+        signal.set_wakeup_fd(previous_wakeup)
         for number, handler in handlers.items():
             signal.signal(number, handler)
+        pending = _received(wakeup)
+        for sock in (connection, wakeup, woken):
+            sock.close()
         for number in pending:
             os.kill(os.getpid(), number)
         return
-    pid = fork[0]
-    for number in pending:
-        _signal(pid, number)
-    reply = connection.recv(32)
+    reply = None
+    while reply is None:
+        readable, _, _ = select.select([connection, wakeup], [], [])
+        for number in _received(wakeup):
+            _signal(pid, number)
+        if connection in readable:
+            reply = connection.recv(32)
     if not reply:  # the server died under the job: fail it, and stop its orphaned fork from writing on
         _signal(pid, signal.SIGTERM)
     code = int(reply) if reply else 1
@@ -75,6 +86,16 @@ def hand_over():
         signal.signal(-code, signal.SIG_DFL)
         os.kill(os.getpid(), -code)
     sys.exit(code)
+
+
+def _received(wakeup):
+    """The signal numbers waiting in the non-blocking socket ``wakeup``, in order of arrival (a byte each)."""
+    numbers = []
+    try:
+        while True:
+            numbers.extend(wakeup.recv(64))
+    except BlockingIOError:
+        return numbers
 
 
 def _signal(pid, number):
