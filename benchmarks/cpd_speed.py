@@ -1,6 +1,6 @@
 """CPD speed: dgmm's rigid CPD (dgmm.registration.cpd) against pycpd's RigidRegistration, same trials, one thread.
 
-The paper's Fig 5 problem: bunny res4, trials drawn as the workflow draws them (dgmm.experiments.trials.make_trials:
+The paper's Fig 6 problem: bunny res4, trials drawn as the workflow draws them (dgmm.experiments.trials.make_trials:
 453 source and 453 target points from a dense surface sample, ±15° per axis, ±0.05 per axis), 150 iterations, tol 1e-9.
 Each trial is registered by both, interleaved so that load on the shared machine hits them alike; pycpd's rigid
 part is read as the workflow reads it (Kabsch of the source to pycpd's moved source). Prints the median wall and
@@ -68,7 +68,7 @@ def main():
             identical += bool(np.array_equal(ours.rotation, rotation) and np.array_equal(ours.translation, translation)
                               and ours.iterations == iterations)
 
-    print(f"\nbunny res4, {args.trials} Fig 5 trials, {len(vertices)} x {len(vertices)} points, 150 iterations, "
+    print(f"\nbunny res4, {args.trials} Fig 6 trials, {len(vertices)} x {len(vertices)} points, 150 iterations, "
           "tol 1e-9, 1 thread")
     print(f"{'CPD':>8} {'wall ms':>8} {'CPU ms':>7} {'iters mean':>11}")
     for name, values in rows.items():

@@ -1,6 +1,6 @@
 """Registration side by side: our P2D, D2D, ICP and CPD against Open3D, small_gicp and probreg, same seeded trials.
 
-The trials are the workflow's own (``dgmm.experiments.trials.make_trials``, root seed 0, Fig 5's protocol): the bunny
+The trials are the workflow's own (``dgmm.experiments.trials.make_trials``, root seed 0, Fig 6's protocol): the bunny
 res4 (453 source points, ±15° and ±0.05 m per axis) and one Table 1 model in millimetres (Lucy, quadric1000 mesh);
 source and target points drawn from a 50,000-point Poisson-disk sample of the mesh the registered mesh comes from,
 P2D mixtures (K=100, k-means start, the scaled protocol's covariance floor) fitted as the workflow fits them
@@ -47,7 +47,7 @@ ROOT = Path(__file__).resolve().parents[1]
 MIRRORS = [ROOT / ".." / "shared" / "data" / "stanford"]
 CACHE = Path("~/.cache/dgmm").expanduser()
 MIXTURE = dict(n_components=100, max_iter=100, tol=1e-5, reg_covar=1e-6, variant="textbook")  # config.yaml
-EXPERIMENTS = {"fig5": ("bunny", "res4"), "table1": ("lucy", "quadric1000")}
+EXPERIMENTS = {"fig6": ("bunny", "res4"), "table1": ("lucy", "quadric1000")}
 
 
 # ------------------------------------------------------------------------------------------------ trials
@@ -201,8 +201,8 @@ def _timed(register):
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--trials", type=int, default=250, help="Fig 5 trials for our P2D rows (the paper's 250)")
-    parser.add_argument("--peer-trials", type=int, default=20, help="Fig 5 trials for every other row")
+    parser.add_argument("--trials", type=int, default=250, help="Fig 6 trials for our P2D rows (the paper's 250)")
+    parser.add_argument("--peer-trials", type=int, default=20, help="Fig 6 trials for every other row")
     parser.add_argument("--table1-trials", type=int, default=10, help="trials on the millimetre model")
     parser.add_argument("--output", type=Path, help="also write the markdown table here")
     args = parser.parse_args()
@@ -213,8 +213,8 @@ def main():
              "(% of diagonal) | median ms per registration (wall / CPU) | note |", "|---|---|---|---|---|---|---|"]
     with threadpool_limits(1):
         for name, (model, mesh) in EXPERIMENTS.items():
-            n_all = args.trials if name == "fig5" else args.table1_trials
-            n_peer = min(n_all, args.peer_trials if name == "fig5" else args.table1_trials)
+            n_all = args.trials if name == "fig6" else args.table1_trials
+            n_peer = min(n_all, args.peer_trials if name == "fig6" else args.table1_trials)
             diagonal, setups, mixtures = experiment(model, mesh, n_all)
             print(f"{name}: {model}/{mesh}, diagonal {diagonal:.5g}, {len(setups[0].moved)} points", flush=True)
             methods = {key: (value if key.startswith("D2D") else _timed(value))

@@ -1,4 +1,4 @@
-"""Fig 5 and Fig 6 draw the numbers of their tables: read back from the matplotlib figures' artists (not the PNG).
+"""Fig 6 and Fig 7 draw the numbers of their tables: read back from the matplotlib figures' artists (not the PNG).
 
 References are built here: hand-made registration errors with known means; a hand-made trajectory, rigidly
 moved and scaled copies of it whose aligned positions and ATE are known in closed form.
@@ -11,14 +11,14 @@ from matplotlib.collections import PathCollection
 from scipy.spatial.transform import Rotation
 
 from dgmm.experiments.report import paper
-from dgmm.experiments.report.figures import fig5_registration
-from dgmm.odometry.figure import fig6
+from dgmm.experiments.report.figures import fig6_registration
+from dgmm.odometry.figure import fig7
 from dgmm.odometry.tum import Trajectory
 
 METHODS = ["mesh-kmeans", "points-random", "icp", "cpd"]
 
 
-def fig5_errors():
+def fig6_errors():
     """Per method, 7 trials of rotation and translation errors with distinct, known values (and an unrelated model)."""
     rng = np.random.default_rng(0)
     errors = {("bunny", "res4", method): {"rot": rng.uniform(0.1, 3.0, 7) * (k + 1),
@@ -28,13 +28,13 @@ def fig5_errors():
     return errors
 
 
-def test_fig5_draws_every_trial_our_means_and_the_paper_s_means_per_method():
+def test_fig6_draws_every_trial_our_means_and_the_paper_s_means_per_method():
     """Each panel's tick labels are the methods in the paper's order; the dots above tick i are method i's trials
     of that panel's error (rotation left, translation right); the mean markers are their means; the red crosses
     the paper's means. Tried and failing: swapped panels, methods drawn in another order than their labels, the
     paper's means of the other panel."""
-    errors = fig5_errors()
-    figure = fig5_registration(errors)
+    errors = fig6_errors()
+    figure = fig6_registration(errors)
     rotation_axes, translation_axes = figure.axes
     for ax, name, column in ((rotation_axes, "rot", 0), (translation_axes, "trans", 1)):
         labels = [label.get_text() for label in ax.get_xticklabels()]
@@ -51,7 +51,7 @@ def test_fig5_draws_every_trial_our_means_and_the_paper_s_means_per_method():
             assert line.get_ydata()[0] == pytest.approx(np.mean(errors["bunny", "res4", method][name]), rel=1e-12)
         (crosses,) = [line for line in ax.lines if line.get_marker() == "x"]
         np.testing.assert_array_equal(crosses.get_xdata(), np.arange(1, len(METHODS) + 1))
-        np.testing.assert_allclose(crosses.get_ydata(), [paper.FIG5_MEANS[m][column] for m in METHODS])
+        np.testing.assert_allclose(crosses.get_ydata(), [paper.FIG6_MEANS[m][column] for m in METHODS])
 
 
 def hand_made_trajectory(n=30):
@@ -62,7 +62,7 @@ def hand_made_trajectory(n=30):
     return Trajectory(100.0 + t, rotations, translations)
 
 
-def test_fig6_draws_the_ground_truth_and_each_estimate_aligned_with_its_ate():
+def test_fig7_draws_the_ground_truth_and_each_estimate_aligned_with_its_ate():
     """A rigidly moved copy of the ground truth must be drawn on top of it (the figure applies the ATE's
     alignment) with ATE 0 in its label; a copy scaled by 1.3 about its centroid aligns by the identity, so it is
     drawn as that scaled copy, labelled with 0.3 times the positions' RMS spread. Tried and failing: the estimate
@@ -74,7 +74,7 @@ def test_fig6_draws_the_ground_truth_and_each_estimate_aligned_with_its_ate():
     scaled = Trajectory(truth.timestamps, truth.rotations, centroid + 1.3 * (truth.translations - centroid))
     spread = np.sqrt(np.mean(np.sum((truth.translations - centroid) ** 2, axis=1)))
 
-    figure = fig6({"hand-made": (truth, {"gmm-pixels-textbook": moved, "icp": scaled})})
+    figure = fig7({"hand-made": (truth, {"gmm-pixels-textbook": moved, "icp": scaled})})
     (ax,) = figure.axes
     lines = {line.get_label(): line for line in ax.lines}
     ground = lines["ground truth"]
@@ -92,11 +92,11 @@ def test_fig6_draws_the_ground_truth_and_each_estimate_aligned_with_its_ate():
     assert ate[scaled_label] == pytest.approx(0.3 * spread, rel=1e-3)  # the label's 3 significant digits
 
 
-def test_fig6_of_a_recording_without_ground_truth_draws_the_estimate_as_it_is():
+def test_fig7_of_a_recording_without_ground_truth_draws_the_estimate_as_it_is():
     """No ground truth (a recording's): no ground-truth line, no ATE, the estimate's own x and z (the first
     camera's frame seen from above), beside a panel with ground truth."""
     truth = hand_made_trajectory()
-    figure = fig6({"scored": (truth, {"icp": truth}), "unscored": (None, {"icp": truth})})
+    figure = fig7({"scored": (truth, {"icp": truth}), "unscored": (None, {"icp": truth})})
     _, ax = figure.axes
     (line,) = ax.lines
     assert line.get_label() == "ICP" and "no ground truth" in ax.get_title()

@@ -289,7 +289,7 @@ def test_writer_rejects_depth_it_cannot_store(tmp_path):
 # ------------------------------------------------------------------------------------------------ the sweep
 @pytest.mark.slow
 def test_sweep_runs_recordings_beside_tum_folders(recordings, tmp_path):
-    """`snakemake odometry` with two recordings in odometry.sequences: one with ground truth (scored, in Fig 6
+    """`snakemake odometry` with two recordings in odometry.sequences: one with ground truth (scored, in Fig 7
     against it) and one without camera info or ground truth (its intrinsics configured; a row without metrics, its
     panel unaligned); the job's trajectory has the command line's timestamps, the header stamps."""
     from dgmm.runtime.tables import read_csv
@@ -306,7 +306,7 @@ def test_sweep_runs_recordings_beside_tum_folders(recordings, tmp_path):
     rows = {row["sequence"]: row for row in read_csv(results / "tables" / "odometry.csv")}
     assert set(rows) == {"fr1_16UC1", "fr1_noinfo"} and rows["fr1_16UC1"]["frames"] == "8"
     assert 0 < float(rows["fr1_16UC1"]["ate_rmse_m"]) < 0.05 and rows["fr1_noinfo"]["ate_rmse_m"] == ""
-    assert (results / "odometry" / "fig6.png").stat().st_size > 0
+    assert (results / "odometry" / "fig7.png").stat().st_size > 0
     cli = dgmm_odometry(recordings["16UC1"], "--depth-topic", DEPTH, "--frames", 8, "--method", "icp", "-o",
                         tmp_path / "t.txt")
     assert cli.returncode == 0, cli.stderr

@@ -1,4 +1,4 @@
-"""The odometry stage (Fig 6) run by real Snakemake on tests/config.yaml: 8 frames of the synthetic sequence, and a
+"""The odometry stage (Fig 7) run by real Snakemake on tests/config.yaml: 8 frames of the synthetic sequence, and a
 configured TUM folder that is missing (reported pending).
 
 References are independent of the code under test: evo's APE (Umeyama alignment without scale) recomputed from the
@@ -62,9 +62,9 @@ def test_every_output_exists(stage):
         assert len(tum_rows(job / "trajectory.txt")) == N_FRAMES
     for table in ("odometry.csv", "odometry_seconds.csv"):
         assert (stage / "tables" / table).is_file()
-    png = (stage / "odometry" / "fig6.png").read_bytes()
+    png = (stage / "odometry" / "fig7.png").read_bytes()
     assert png.startswith(b"\x89PNG") and b"tIME" not in png and b"Software" not in png
-    with Image.open(stage / "odometry" / "fig6.png") as image:
+    with Image.open(stage / "odometry" / "fig7.png") as image:
         assert min(image.size) > 300
     assert not list(stage.rglob("*.part")) and not list(stage.rglob("*.tmp"))
 

@@ -114,7 +114,7 @@ def test_table_bytes_are_the_recorded_ones(workdir):
 
 
 def test_every_trial_ends_in_the_papers_range(table):
-    """Paper Fig 5 (bunny, 250 trials): every method's mean rotation error is below 3 deg and translation error
+    """Paper Fig 6 (bunny, 250 trials): every method's mean rotation error is below 3 deg and translation error
     below 1.1% of the diagonal. Each trial, not a median (which two diverging trials of four pass), must end in
     that range: here every method's worst trial is within 2.7 deg and 0.65%. A trial that diverges fails, and so
     does one that removes only two thirds of its motion (tried on trial 1, which starts 9 deg away: 3.02 deg)."""

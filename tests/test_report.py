@@ -131,9 +131,9 @@ def test_figures_follow_the_configured_inputs():
     pictures = ["res4", "full", "dense", "random", "clustering", "quadric", "poisson"]
     everything = ["likelihood", "fig2", "registration", *pictures]
     assert figure_names(everything, ["res4-exact", "quadric1000-exact", "bunny/res4"]) == \
-        ["fig1", "fig2", "fig3", "fig4", "fig5", "fig5_authors", "fig7"]
+        ["fig1", "fig2", "fig3", "fig4", "fig6", "fig6_authors", "fig5"]
     assert figure_names(["likelihood", "fig2", "res4"], ["res4-exact"]) == ["fig1", "fig2", "fig3"]
-    assert figure_names(everything, ["res4-exact", "bunny/quadric1000"]) == ["fig1", "fig2", "fig3", "fig7"]
+    assert figure_names(everything, ["res4-exact", "bunny/quadric1000"]) == ["fig1", "fig2", "fig3", "fig5"]
 
 
 def test_summary_rows_link_each_claim_to_its_section_and_details():
@@ -193,7 +193,7 @@ def test_markdown_and_html_rendering():
 # ---------------------------------------------------------------------------------------------------------
 
 FIG3_FIG4 = claims.FIG3_INPUTS + claims.FIG4_INPUTS
-FIGURES = ("fig1", "fig2", "fig3", "fig4", "fig5", "fig5_authors", "fig7")
+FIGURES = ("fig1", "fig2", "fig3", "fig4", "fig6", "fig6_authors", "fig5")
 
 
 def synthetic_results(results):
@@ -236,7 +236,7 @@ def synthetic_results(results):
     trajectories = Figure(figsize=(2, 2))
     trajectories.add_subplot().plot([0, 1], [0, 1])
     (results / "odometry").mkdir()
-    trajectories.savefig(results / "odometry" / "fig6.png")
+    trajectories.savefig(results / "odometry" / "fig7.png")
     vertices, faces = load_mesh(SHARED_DATA / "stanford" / "bunny_res4.ply")
     bunny = results / "data" / "bunny"
     for name in ("res4", "full", "quadric1000", "clustering1000"):
@@ -285,7 +285,7 @@ def run_report(workdir, config):
 @pytest.fixture(scope="module")
 def built(tmp_path_factory):  # the tests using it are marked slow: a real Snakemake run
     """The report rule run twice on synthetic tables: (report folder, bytes of every file of the first run, figure
-    names). Fig 6 is expected when tests/config.yaml configures the odometry stage."""
+    names). Fig 7 is expected when tests/config.yaml configures the odometry stage."""
     workdir = tmp_path_factory.mktemp("report")
     synthetic_results(workdir / "results")
     config = yaml.safe_load((REPO / "tests" / "config.yaml").read_text())
@@ -297,7 +297,7 @@ def built(tmp_path_factory):  # the tests using it are marked slow: a real Snake
     out = workdir / "out"
     first = {path.relative_to(out): path.read_bytes() for path in sorted(out.rglob("*")) if path.is_file()}
     run_report(workdir, workdir / "config.yaml")
-    return out, first, FIGURES + ("fig6",) * ("odometry" in config)
+    return out, first, FIGURES + ("fig7",) * ("odometry" in config)
 
 
 @pytest.mark.slow
@@ -307,7 +307,7 @@ def test_report_writes_every_output(built):
     figures = {f"figures/{name}.png" for name in drawn}
     assert names == {"report.html", "report.md", "claims.md", "table1.csv", "table1.md"} | figures
     markdown = (out / "report.md").read_text()
-    assert ("Pending: waits for the odometry stage" in markdown) == ("fig6" not in drawn)
+    assert ("Pending: waits for the odometry stage" in markdown) == ("fig7" not in drawn)
     assert all(f"({figure})" in markdown for figure in figures)
     assert len(markdown.encode()) <= MAX_REPORT_BYTES
     # Every claim: once in the summary, once in its section (with both EMs' marks), once in the evidence ledger.
@@ -393,7 +393,7 @@ def odometry_row(sequence, method, variant, ate, missing=""):
 @pytest.mark.slow
 def test_report_zip_carries_every_report_output(built):
     """`snakemake --report report.zip` holds every file the rules mark as report output: Table 1, each figure, Fig 2's
-    table and Fig 6."""
+    table and Fig 7."""
     out, first, drawn = built
     workdir = out.parent
     command = [str(SNAKEMAKE), "--snakefile", str(REPO / "Snakefile"), "--directory", str(workdir),
@@ -402,6 +402,6 @@ def test_report_zip_carries_every_report_output(built):
     assert run.returncode == 0, run.stderr[-3000:]
     with zipfile.ZipFile(workdir / "report.zip") as archive:
         names = {Path(name).name for name in archive.namelist()}
-    expected = {"table1.csv", "fig2.csv"} | {f"{name}.png" for name in drawn if name != "fig6"}
-    expected |= {"fig6.png"} if "fig6" in drawn else set()
+    expected = {"table1.csv", "fig2.csv"} | {f"{name}.png" for name in drawn if name != "fig7"}
+    expected |= {"fig7.png"} if "fig7" in drawn else set()
     assert expected <= names, sorted(expected - names)

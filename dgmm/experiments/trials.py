@@ -1,4 +1,4 @@
-"""The paper's registration experiment (§VI-A "Mesh Registration", Fig 5 and Table 1) as plain functions.
+"""The paper's registration experiment (§VI-A "Mesh Registration", Fig 6 and Table 1) as plain functions.
 
 One experiment registers the source points of many random rigid trials back onto one model with several
 methods (:data:`METHODS`). Every method sees the same trials (authors' protocol, leonidk/direct_gmm):
@@ -68,7 +68,7 @@ METHODS = {
     "icp": Method("icp"),
     "cpd": Method("cpd"),
 }
-"""The paper's Fig 5 methods: P2D on mesh and point mixtures, point-to-point ICP and CPD; and ``*-c2f``, P2D on the
+"""The paper's Fig 6 methods: P2D on mesh and point mixtures, point-to-point ICP and CPD; and ``*-c2f``, P2D on the
 same mixtures over a coarse-to-fine schedule of widened covariances (:mod:`dgmm.registration.coarse_to_fine`)."""
 
 # algorithm -> register(moved source, target points, mixture, callback=..., **options)

@@ -18,7 +18,7 @@ The public namespace; one concept per module:
 - :mod:`~dgmm.odometry.loop`: the odometry loop composing frame-to-frame registrations into a trajectory;
 - :mod:`~dgmm.odometry.metrics`: ATE and RPE of TUM's benchmark;
 - :mod:`~dgmm.odometry.synthetic`: a ray-cast TUM-format sequence of a room (imported on its own: trimesh);
-- :mod:`~dgmm.odometry.figure`: Fig 6, the top-down trajectories (imported on its own: matplotlib).
+- :mod:`~dgmm.odometry.figure`: Fig 7, the top-down trajectories (imported on its own: matplotlib).
 
 Conventions: poses map camera to world, ``x_w = R x_c + t``; a trajectory holds one row per frame; pixels are
 ``(u, v)`` = (column, row) of an optical camera frame (x right, y down, z forward); depth in metres, 0 = none.

@@ -1,4 +1,4 @@
-"""Fig 6: top-down view of visual-odometry trajectories against the ground truth (paper §VI-D, Fig 6).
+"""Fig 7: top-down view of visual-odometry trajectories against the ground truth (paper §VI-D, Fig 7).
 
 Drawn headless: a :class:`matplotlib.figure.Figure` built without pyplot (Agg canvas when saved), and
 :func:`save_png` writes it with no software or time metadata, so the same trajectories give the same bytes.
@@ -66,8 +66,8 @@ def _panel(axes, groundtruth, estimates, plane, sequence, max_difference):
     axes.set_title(f"{sequence}: {where}, {n_frames} frames", fontsize=10)
 
 
-def fig6(panels, *, plane="xy", max_difference=MAX_TIME_DIFFERENCE):
-    """Top-down views of the ground truth and each run's aligned trajectory, one panel per sequence (paper Fig 6).
+def fig7(panels, *, plane="xy", max_difference=MAX_TIME_DIFFERENCE):
+    """Top-down views of the ground truth and each run's aligned trajectory, one panel per sequence (paper Fig 7).
 
     Parameters
     ----------
@@ -89,7 +89,7 @@ def fig6(panels, *, plane="xy", max_difference=MAX_TIME_DIFFERENCE):
     if plane not in PLANES:
         raise InputError(f"plane must be one of {sorted(PLANES)}, got {plane!r}")
     if not panels or not all(estimates for _, estimates in panels.values()):
-        raise InputError("fig6 needs at least one sequence, each with at least one estimated trajectory")
+        raise InputError("fig7 needs at least one sequence, each with at least one estimated trajectory")
     figure = Figure(figsize=(5.5 * len(panels), 5.0), dpi=110, layout="constrained")
     for axes, (sequence, (groundtruth, estimates)) in zip(figure.subplots(1, len(panels), squeeze=False)[0],
                                                            panels.items()):
@@ -97,8 +97,8 @@ def fig6(panels, *, plane="xy", max_difference=MAX_TIME_DIFFERENCE):
     return figure
 
 
-def fig6_from_files(panels, **options):
-    """:func:`fig6` of TUM trajectory files.
+def fig7_from_files(panels, **options):
+    """:func:`fig7` of TUM trajectory files.
 
     Parameters
     ----------
@@ -106,9 +106,9 @@ def fig6_from_files(panels, **options):
         Sequence name -> (its ``groundtruth.txt`` or None, run name -> its estimated trajectory file
         ``results/odometry/{sequence}/{run}/trajectory.txt``).
     **options
-        Passed to :func:`fig6`.
+        Passed to :func:`fig7`.
     """
-    return fig6({sequence: (None if truth is None else read_trajectory(truth),
+    return fig7({sequence: (None if truth is None else read_trajectory(truth),
                             {run: read_trajectory(path) for run, path in runs.items()})
                  for sequence, (truth, runs) in panels.items()}, **options)
 

@@ -8,7 +8,7 @@ Only the E-step's memory traffic differs: pycpd builds an ``(n_source, n_target,
 the column sums every iteration; here scipy's ``cdist`` writes the squared distances into one reused
 ``(n_source, n_target)`` buffer, summing in pycpd's order, and the column sums are broadcast. Every floating point
 operation is pycpd's, so the poses agree with pycpd's to the last bit on the same inputs (tests/test_cpd.py checks
-them to 1e-9 on seeded problems, some stopping by tolerance; the sweep's 250 Fig 5 trials come out byte-identical),
+them to 1e-9 on seeded problems, some stopping by tolerance; the sweep's 250 Fig 6 trials come out byte-identical),
 in a fraction of its time (benchmarks/cpd_speed.py).
 
 Points are rows, as everywhere in :mod:`dgmm.registration`: the source (pycpd's ``Y``, the moving mixture's

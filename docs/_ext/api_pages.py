@@ -17,7 +17,7 @@ MODULES = [
     "dgmm.meshes",  # Poisson-disk and Monte-Carlo sampling, quadric and clustering decimation (pymeshlab).
     "dgmm.model_io",  # Saving and loading fitted mixtures (.npz).
     "dgmm.odometry.synthetic",  # The synthetic TUM-format room sequence (imported on its own: trimesh).
-    "dgmm.odometry.figure",  # Fig 6, the top-down trajectories (imported on its own: matplotlib).
+    "dgmm.odometry.figure",  # Fig 7, the top-down trajectories (imported on its own: matplotlib).
     "dgmm.odometry.ros2_mcap",  # ROS 2 recordings in MCAP as depth sequences (imported on its own: mcap).
 ]
 

@@ -10,7 +10,7 @@ the authors' protocol (Euler angles within ±15°, translations within ±0.05 pe
 * by the authors' point-to-point ICP, with nearest neighbours both ways, onto an independent draw of surface points.
 
 Errors are the residual rotation angle and how far the residual pose moves the points' centroid, in % of the
-bounding-box diagonal, as in the paper's Fig 5.
+bounding-box diagonal, as in the paper's Fig 6.
 """
 
 from pathlib import Path

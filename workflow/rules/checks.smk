@@ -1,9 +1,9 @@
 # Checks (dgmm.experiments.checks): small experiments for claims of the paper the sweeps above do not measure, run
 # when config has a `checks` section (else the report says those claims are pending). Under results/tables/:
 #   convergence.csv        fits run to checks.convergence.max_iter iterations from the Fig 3 sweep's seeds: eval
-#                          log-likelihood at 25 and at max_iter, iterations to converge, Fig 7's fuller-model numbers
+#                          log-likelihood at 25 and at max_iter, iterations to converge, Fig 5's fuller-model numbers
 #   resampling.csv         a mesh against its copy with every triangle split in four (paper section II)
-#   optimisers.csv         P2D with CG/BFGS and quaternion/rotation vector on the first Fig 5 trials
+#   optimisers.csv         P2D with CG/BFGS and quaternion/rotation vector on the first Fig 6 trials
 #   identities.csv         the identities the paper states (CGAL's triangle moment, the exact and approximate mean
 #                          updates, hierarchical GMM updates, EM on points as scikit-learn's), each side independent
 #   optimisers_seconds.csv, timing_seconds.csv   CPU times (machine dependent, kept apart from the tables above);

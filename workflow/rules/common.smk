@@ -25,7 +25,7 @@ ODO_DIR = f"{RESULTS}/odometry"
 CHECKS = config.get("checks", {})
 SYNTHETIC_SEQUENCE = f"{ODO_DIR}/synthetic/sequence"
 REPORT_DIR = config.get("report", {}).get("dir", "reports")
-PICTURE_BUDGET = 1000  # Fig 7 shows the paper's 1000-primitive decimations and samples
+PICTURE_BUDGET = 1000  # Fig 5 shows the paper's 1000-primitive decimations and samples
 # Rule priorities: of the jobs ready to run, Snakemake starts those of highest priority first. First the jobs every
 # other waits on (the data stage), then the longest (odometry), then the others, roughly longest first, so that the
 # sweep does not end with one core on a long job while the other idles (benchmarks/sweep_profile.py counts the idle
@@ -219,7 +219,7 @@ def odometry_inputs(wildcards):
 
 
 def odometry_figure_inputs():
-    """What Fig 6 reads besides the trajectories: every sequence (a folder's ground truth is read from it) and
+    """What Fig 7 reads besides the trajectories: every sequence (a folder's ground truth is read from it) and
     the recordings' ground-truth files."""
     return [source["path"] for source in ODO_SEQUENCES.values()] + [
         source["groundtruth"] for source in ODO_SEQUENCES.values() if "depth_topic" in source and source["groundtruth"]
@@ -290,7 +290,7 @@ def report_inputs():
     if "odometry" in config:
         inputs.update(
             odometry=f"{RESULTS}/tables/odometry.csv",
-            fig6=f"{RESULTS}/odometry/fig6.png",
+            fig7=f"{RESULTS}/odometry/fig7.png",
             odometry_seconds=f"{RESULTS}/tables/odometry_seconds.csv",
         )
     inputs.update(checks_outputs())

@@ -1,4 +1,4 @@
-# Visual odometry (paper §VI-D "Visual Odometry", Fig 6): frame-to-frame odometry of the first odometry.frames depth
+# Visual odometry (paper §VI-D "Visual Odometry", Fig 7): frame-to-frame odometry of the first odometry.frames depth
 # frames of every configured sequence that exists (odometry.sequences: TUM RGB-D folders and ROS 2 recordings; missing
 # ones are reported pending) and of the synthetic one (rendered once from the seed into results/odometry/synthetic/sequence/), one job per
 # (sequence, run): a run is a GMM method with an EM variant (gmm-pixels-textbook, gmm-pixels-authors; the plain-point
@@ -9,7 +9,7 @@
 #   seconds.csv      each frame's model and registration time, and CPU time (kept apart: ate.csv is byte-identical)
 #   odometry.mcap    per-frame timings, the estimated and ground-truth trajectories (foxglove.PosesInFrame)
 #   odometry.rrd     the camera path and each frame's mixture (or ICP points) on the timeline `frame`
-# and results/tables/odometry.csv (ATE, RPE), odometry_seconds.csv (mean timings), results/odometry/fig6.png.
+# and results/tables/odometry.csv (ATE, RPE), odometry_seconds.csv (mean timings), results/odometry/fig7.png.
 import re
 
 ODO_JOB = f"{ODO_DIR}/{{sequence}}/{{run}}"
@@ -95,9 +95,9 @@ rule odometry_figure:
         sequences=odometry_figure_inputs(),
         trajectories=odometry_outputs("trajectory.txt"),
     output:
-        png=report(f"{ODO_DIR}/fig6.png", caption="../report/odometry_fig6.rst", category="Figures"),
+        png=report(f"{ODO_DIR}/fig7.png", caption="../report/odometry_fig7.rst", category="Figures"),
     log:
-        f"{RESULTS}/logs/odometry/fig6.log",
+        f"{RESULTS}/logs/odometry/fig7.log",
     benchmark:
         f"{RESULTS}/benchmarks/odometry_figure.tsv"
     threads: 1

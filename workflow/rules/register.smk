@@ -1,4 +1,4 @@
-# Registration (paper §VI-A "Mesh Registration": Fig 5, Table 1's error columns): for every configured (model, mesh),
+# Registration (paper §VI-A "Mesh Registration": Fig 6, Table 1's error columns): for every configured (model, mesh),
 # random rigid trials registered by each method, every method on the same trials and source points. The source
 # points are drawn from the Poisson-disk evaluation set of the mesh the registered mesh comes from (res4's own,
 # else the full model's). Each experiment runs under its trial protocols (scaled, literal) and each mesh mixture

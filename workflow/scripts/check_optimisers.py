@@ -1,4 +1,4 @@
-"""Job: P2D with CG and BFGS, quaternion and rotation vector, on the first Fig 5 trials
+"""Job: P2D with CG and BFGS, quaternion and rotation vector, on the first Fig 6 trials
 (dgmm.experiments.checks.optimisers)."""
 from dgmm.runtime.job_server import hand_over
 
@@ -21,7 +21,7 @@ vertices, _ = load_mesh(smk.input.mesh)
 diagonal = bounding_diagonal(vertices)
 setups = make_trials(load_points(smk.input.dense), len(vertices), range(p.checks["trials"]), root_seed=p.seed,
                      key="registration/bunny/res4", diagonal=diagonal, max_angle_deg=p.max_angle_deg,
-                     max_translation=p.max_translation)  # Fig 5's first trials (registration_chunk.py's key)
+                     max_translation=p.max_translation)  # Fig 6's first trials (registration_chunk.py's key)
 with threadpool_limits(smk.threads):
     rows, seconds = optimiser_rows(setups, load_model(smk.input.gmm)[0], diagonal)
 write_csv(smk.output.rows, rows, COLUMNS)

@@ -3,7 +3,7 @@
 One module per experiment, each a plain function a thin job script calls (``workflow/rules/checks.smk``):
 
 - :mod:`~.convergence`: fits run to 100 iterations (Discussion: convergence speed, the 100-iteration comparison) and
-  the "fuller model" numbers of Fig 7 (surface coverage by 2σ ellipsoids, spread of the weights);
+  the "fuller model" numbers of Fig 5 (surface coverage by 2σ ellipsoids, spread of the weights);
 - :mod:`~.resampling`: the same mesh with every triangle split in four (§II, invariance to resampling);
 - :mod:`~.optimisers`: P2D with CG beside BFGS and a rotation vector beside the quaternion (§VI-A);
 - :mod:`~.identities`: the identities the paper states (§III, §V-A, §VII), each side computed independently;

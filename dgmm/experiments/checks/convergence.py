@@ -6,7 +6,7 @@ here runs ``max_iter`` (config: 100) EM iterations from the seed the fitting swe
 K, init, seed), so its state after ``SNAPSHOT`` (25) iterations is the sweep's fit. A row records the evaluation
 log-likelihood at both (``eval_ll_25``, ``eval_ll_final``), how many iterations the bound took to come within each
 of ``CONVERGED_NATS`` of its final value,
-and two "fuller model" numbers of the 25-iteration mixture (Fig 7): the share of the evaluation points inside at
+and two "fuller model" numbers of the 25-iteration mixture (Fig 5): the share of the evaluation points inside at
 least one component's 2σ ellipsoid, and the effective number of components ``exp(entropy of the weights)`` over K.
 """
 import numpy as np

@@ -1,11 +1,11 @@
-"""Timing checks of the visual odometry (§VI-D, Fig 6) on the first frames of a TUM sequence.
+"""Timing checks of the visual odometry (§VI-D, Fig 7) on the first frames of a TUM sequence.
 
 - ``d2d primitives`` ("D2D registration time was 22% faster when using GMMs built from primitives"): every frame's
   gmm-pixels and gmm-points mixtures built as the sweep's odometry builds them (textbook EM), then each consecutive
   pair registered by the sweep's D2D (``pixels``, ``points``: the schedule's rounds and cuts) and by the paper's,
   BFGS with forward differences on the determinant-free D2D cost of the whole mixtures (``pixels bfgs``,
   ``points bfgs``);
-- ``odometry frame`` (Fig 6: "Runtime for both methods was similar"): one odometry step per frame, the frame's model
+- ``odometry frame`` (Fig 7: "Runtime for both methods was similar"): one odometry step per frame, the frame's model
   and its registration onto the previous frame's, by gmm-pixels (textbook EM) and by ICP on its random points.
 
 The frames' models are the sweep's: the methods' own functions (:data:`dgmm.odometry.METHODS`) with the options

@@ -5,7 +5,7 @@
   determinant factor, from the identity, between a mesh's mixture and a mixture of its vertices moved by a small
   random rigid motion per repeat;
 - ``cpd vs p2d`` (§VI-A: "We adjusted pyCPD to run for 150 iterations to approximately match the run-time of our
-  P2D GMM registration"): on each of the first Fig 5 trials, pycpd's rigid CPD (``cpd``, the paper's), dgmm's
+  P2D GMM registration"): on each of the first Fig 6 trials, pycpd's rigid CPD (``cpd``, the paper's), dgmm's
   operation-for-operation copy of it that the sweep runs (``cpd dgmm``), P2D as the sweep runs it (``p2d``, numba
   kernels) and P2D with BFGS's forward differences on the numpy cost, the paper's (``p2d numerical``: numpy beside
   pycpd's numpy), all onto the trial's mixture and target points.
@@ -99,7 +99,7 @@ def register_pycpd(source, target, max_iter, tol, w=0.0):
 
 
 def cpd_p2d_times(mesh, dense, gmm, *, repeats, root_seed, key, max_angle_deg, max_translation, cpd, gradient):
-    """CPU seconds of CPD (pycpd's and dgmm's) and P2D (the sweep's and forward differences) on the first Fig 5
+    """CPU seconds of CPD (pycpd's and dgmm's) and P2D (the sweep's and forward differences) on the first Fig 6
     trials.
 
     Parameters

@@ -26,7 +26,7 @@ INPUTS = {
     "fig2": "the Fig 2 table fig2.csv",
     "registration": "the registration stage (config section `registration`)",
     "odometry": "the odometry stage's odometry.csv (config section `odometry`)",
-    "fig6": "the odometry stage's trajectory figure (config section `odometry`)",
+    "fig7": "the odometry stage's trajectory figure (config section `odometry`)",
     "registration_seconds": "the registration stage's registration_seconds.csv",
     "odometry_seconds": "the odometry stage's odometry_seconds.csv",
     "convergence": "the convergence check's convergence.csv (config section `checks.convergence`)",
@@ -84,7 +84,7 @@ class Loaded:
     paths : dict
         ``key -> path`` for keys of ``INPUTS``.
     seed : int
-        Root seed of the mixtures fitted for Fig 7.
+        Root seed of the mixtures fitted for Fig 5.
     """
 
     def __init__(self, paths, seed):
@@ -159,23 +159,23 @@ FIGURES = (
                "quadric and clustering decimations (mesh, dashed textbook EM, dotted authors' EM) and Poisson-disk "
                "and random samples (points, solid); band ±1 std over seeds. The y axis spans at most "
                f"{figures.Y_SPAN:g} nats below the best mean."),
-    *(FigureSpec(name, f"Fig 5: registration (bunny), mesh mixtures from {label}", ("registration",),
-                 ("/".join(tables.FIG5_MESH),),
-                 lambda data, variant=variant: figures.fig5_registration(data.errors_of("scaled", variant),
+    *(FigureSpec(name, f"Fig 6: registration (bunny), mesh mixtures from {label}", ("registration",),
+                 ("/".join(tables.FIG6_MESH),),
+                 lambda data, variant=variant: figures.fig6_registration(data.errors_of("scaled", variant),
                                                                          seed=data.seed),
                  "Rotation and translation error of every random rigid trial (scaled protocol) per method (dots), "
                  "box and whisker (notch: median's confidence interval, whiskers 1.5 IQR), our mean (green dot) and "
                  "the paper's mean (red cross). mesh/points: P2D against a K=100 GMM fitted to the mesh or its "
                  f"vertices; mesh GMMs fitted with {label}, points GMMs with textbook EM (the same algorithm).")
-      for name, variant, label in (("fig5", "textbook", "textbook EM"),
-                                   ("fig5_authors", "authors", "the authors' EM"))),
-    FigureSpec("fig6", "Fig 6: visual odometry", ("fig6",), (),
-               lambda data: Path(data.paths["fig6"]).read_bytes(),
+      for name, variant, label in (("fig6", "textbook", "textbook EM"),
+                                   ("fig6_authors", "authors", "the authors' EM"))),
+    FigureSpec("fig7", "Fig 7: visual odometry", ("fig7",), (),
+               lambda data: Path(data.paths["fig7"]).read_bytes(),
                "Top-down trajectories of frame-to-frame odometry: GMM D2D with pixel primitives, with plain points, "
                "and point-to-point ICP, against the ground truth. The GMM runs' per-frame schedule is "
                "odometry.csv's `schedule` (config `odometry.schedule`; docs: the odometry user guide)."),
-    FigureSpec("fig7", "Fig 7: input and output representations", figures.MESH_KEYS, (),
-               lambda data: figures.fig7_representations(data.meshes, figures.pictured_mixtures(data.meshes,
+    FigureSpec("fig5", "Fig 5: input and output representations", figures.MESH_KEYS, (),
+               lambda data: figures.fig5_representations(data.meshes, figures.pictured_mixtures(data.meshes,
                                                                                                  data.seed)),
                "The full bunny, its 1000-primitive decimations and samples, the dense evaluation set, and K=100 "
                f"GMMs ({figures.N_SIGMA:g}σ ellipsoids) fitted in the report job (k-means start, 25 "
@@ -214,7 +214,7 @@ def _table1_cells(row):
             + [tables.format_number(row[c], 0) for c in tables.TABLE1_C2F_COLUMNS])
 
 
-TABLE1_TEXT = ("As the authors' code ran it: the bunny is res4 (Fig 3's K=100 fits, Fig 5's trials), every other model "
+TABLE1_TEXT = ("As the authors' code ran it: the bunny is res4 (Fig 3's K=100 fits, Fig 6's trials), every other model "
                "a quadric decimation to 1000 faces; K=100, k-means; likelihoods of the points GMM (vertices) and the "
                "mesh GMM (triangles); registration errors in % of ICP's mean, with the paper's P2D and, last, the "
                "coarse-to-fine P2D (ours, not in the paper). –: not measured. table1.md has the literal protocol too.")
@@ -244,7 +244,7 @@ def _table1_blocks(loaded):
 
 
 def _shown_with(figure):
-    """Names of the report's figures and tables that a claim's ``figure`` ("Fig 5", "Table 1") stands for."""
+    """Names of the report's figures and tables that a claim's ``figure`` ("Fig 6", "Table 1") stands for."""
     anchor = layout.figure_anchor(figure)
     return [] if anchor is None else ["table1"] if anchor == "table1" else [
         spec.name for spec in FIGURES if re.fullmatch(rf"{anchor}(_\w+)?", spec.name)]
@@ -305,7 +305,7 @@ def build_report(paths, drawn, out_dir, seed=0):
         Names of the figures to draw (:func:`figure_names` of the same inputs).
     out_dir : path-like
     seed : int, default=0
-        Root seed (Fig 7's fitted mixtures, Fig 5's jitter).
+        Root seed (Fig 5's fitted mixtures, Fig 6's jitter).
     """
     out_dir = Path(out_dir)
     loaded = Loaded(paths, seed)

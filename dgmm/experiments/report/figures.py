@@ -12,7 +12,7 @@ from matplotlib.figure import Figure
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
 from dgmm.experiments.report import paper
-from dgmm.experiments.report.tables import FIG5_MESH, fig2_bars
+from dgmm.experiments.report.tables import FIG6_MESH, fig2_bars
 from dgmm.experiments.sweep import SIZED, job_seed, parse_input
 from dgmm.mixture import GaussianMixture
 from dgmm.primitives import Primitives
@@ -29,12 +29,12 @@ VARIANT_STYLE = {"textbook": ("--", "o"), "authors": (":", "s")}  # mesh inputs:
 PICTURE_VIEW = {"elev": 10.0, "azim": -80.0}
 LIGHT = np.array([0.3, -0.8, 0.6]) / np.linalg.norm([0.3, -0.8, 0.6])
 N_SIGMA = 1.5
-"""Ellipsoids of triangles (Fig 1, as the paper: "plotted to 1.5σ") and of mixtures (Fig 7) span 1.5σ."""
+"""Ellipsoids of triangles (Fig 1, as the paper: "plotted to 1.5σ") and of mixtures (Fig 5) span 1.5σ."""
 PICTURED_K = 100
 Y_SPAN = 6.0
 """Figs 3, 4 show this many nats below the best mean; collapsed fits (e.g. vertices at large K) leave the axes."""
 MESH_KEYS = ("res4", "full", "random", "clustering", "dense", "poisson", "quadric")
-"""Data-stage files of the bunny the pictures read (Fig 1: res4; Fig 7: all)."""
+"""Data-stage files of the bunny the pictures read (Fig 1: res4; Fig 5: all)."""
 HEAD = (np.array([-0.065, 0.125, 0.035]), 0.022)
 """Centre and radius (metres) of the bunny's head region in Fig 1."""
 
@@ -153,17 +153,17 @@ def fig1_triangles(meshes):
 
 
 def pictured_mixtures(meshes, seed):
-    """The K=100 GMMs of Fig 7, fitted here: to bunny res4's triangles (mesh) and to its vertices (points).
+    """The K=100 GMMs of Fig 5, fitted here: to bunny res4's triangles (mesh) and to its vertices (points).
 
     Fitted with the sweep's defaults (k-means start, 25 iterations) from seeds derived from ``seed``.
     """
     vertices, faces = meshes["res4"]
     inputs = {"mesh": Primitives.from_mesh(vertices, faces), "points": Primitives.from_points(vertices)}
-    return {name: GaussianMixture(PICTURED_K, random_state=job_seed(seed, f"report/fig7/{name}", 0)).fit(prims)
+    return {name: GaussianMixture(PICTURED_K, random_state=job_seed(seed, f"report/fig5/{name}", 0)).fit(prims)
             for name, prims in inputs.items()}
 
 
-FIG7_PANELS = (
+FIG5_PANELS = (
     # (title, mesh key, how to draw it)
     ("Stanford bunny (full mesh)", "full", "mesh"),
     ("random samples", "random", "points"),
@@ -176,18 +176,18 @@ FIG7_PANELS = (
 )
 
 
-def fig7_representations(meshes, mixtures):
-    """Fig 7: the input representations of the bunny and the points and mesh GMMs, in the paper's layout.
+def fig5_representations(meshes, mixtures):
+    """Fig 5: the input representations of the bunny and the points and mesh GMMs, in the paper's layout.
 
     Parameters
     ----------
     meshes : dict
-        ``name -> (vertices, faces or None)`` for every mesh key of ``FIG7_PANELS``.
+        ``name -> (vertices, faces or None)`` for every mesh key of ``FIG5_PANELS``.
     mixtures : dict
         :func:`pictured_mixtures`.
     """
     figure = new_figure(11.0, 6.0)
-    for index, (title, key, kind) in enumerate(FIG7_PANELS):
+    for index, (title, key, kind) in enumerate(FIG5_PANELS):
         ax = figure.add_subplot(2, 4, index + 1, projection="3d")
         vertices = meshes["full"][0]
         if kind == "mesh":
@@ -279,8 +279,8 @@ def _methods(errors, model_mesh):
     return [m for m in METHOD_ORDER if m in methods] + sorted(methods - set(METHOD_ORDER))
 
 
-def fig5_registration(errors, model_mesh=FIG5_MESH, seed=0):
-    """Fig 5: rotation and translation errors per method: trials, box and whisker (notched median), mean dot.
+def fig6_registration(errors, model_mesh=FIG6_MESH, seed=0):
+    """Fig 6: rotation and translation errors per method: trials, box and whisker (notched median), mean dot.
 
     Paper means (DESIGN.md) are marked with a red cross.
     """
@@ -296,7 +296,7 @@ def fig5_registration(errors, model_mesh=FIG5_MESH, seed=0):
         for index, values in enumerate(data):
             ax.scatter(index + 1 + jitter.uniform(-0.18, 0.18, len(values)), values, s=3, color="tab:blue",
                        alpha=0.4, linewidths=0)
-        published = [(i + 1, paper.FIG5_MEANS[m][column]) for i, m in enumerate(methods) if m in paper.FIG5_MEANS]
+        published = [(i + 1, paper.FIG6_MEANS[m][column]) for i, m in enumerate(methods) if m in paper.FIG6_MEANS]
         if published:
             ax.plot(*zip(*published), "x", color="tab:red", markersize=8, label="paper mean")
         ax.plot([], [], "o", color="tab:green", markeredgecolor="k", label="our mean")

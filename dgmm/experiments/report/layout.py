@@ -28,7 +28,7 @@ def section_anchor(section):
 
 
 def figure_anchor(figure):
-    """Anchor of a claim's figure or table ("Fig 5" → "fig5", "Table 1" → "table1"; "" → None)."""
+    """Anchor of a claim's figure or table ("Fig 6" → "fig6", "Table 1" → "table1"; "" → None)."""
     match = re.fullmatch(r"(Fig|Table) (\d+)", figure)
     return f"{match[1].lower()}{match[2]}" if match else None
 

@@ -23,7 +23,7 @@ from dgmm.experiments.trials import NO_VARIANT, method_variants
 FIG2_EXPRESSIONS = ("triangle", "centroid", "area x centroid")
 TABLE1_MESH = "quadric1000"  # the mesh of Table 1 (the data stage's quadric decimation), except for ...
 TABLE1_MESHES = {"bunny": "res4"}  # ... the bunny: res4, as the authors' gmm_fit_extra.py and registration_test.py
-FIG5_MESH = ("bunny", "res4")  # (model, mesh) of Fig 5
+FIG6_MESH = ("bunny", "res4")  # (model, mesh) of Fig 6
 TABLE1_INPUTS = {"points": "vertices", "mesh": "exact"}  # representations of Table 1's mesh
 TABLE1_FIT = {"K": 100, "init": "kmeans", "variant": "textbook"}
 TABLE1_METHODS = {"points": "points-kmeans", "mesh": "mesh-kmeans", "mesh_c2f": "mesh-kmeans-c2f",

@@ -1,8 +1,8 @@
 """The paper's claims, one function each, grouped by the paper's sections; each grades its claim with both EMs.
 
 Modules: :mod:`~.theory` (§II, §III, §V-A, §VII: Fig 2 and the identities), :mod:`~.fitting` (§IV-A, Fig 3,
-Fig 7), :mod:`~.decimation` (§IV-B, §IV-C, Fig 4), :mod:`~.convergence` (§I, §IV-C, §VII), :mod:`~.registration`
-(§VI-A, §VI-B, Fig 5), :mod:`~.table1` (§VI-C, Table 1), :mod:`~.odometry` (§VI-D, Fig 6). The rule kinds and
+Fig 5), :mod:`~.decimation` (§IV-B, §IV-C, Fig 4), :mod:`~.convergence` (§I, §IV-C, §VII), :mod:`~.registration`
+(§VI-A, §VI-B, Fig 6), :mod:`~.table1` (§VI-C, Table 1), :mod:`~.odometry` (§VI-D, Fig 7). The rule kinds and
 verdicts are in :mod:`~.grading`; what a claim holds and the EM policy in :mod:`~.rules`; what the claims read in
 :mod:`~.measurements`.
 """

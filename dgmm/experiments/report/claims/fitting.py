@@ -1,4 +1,4 @@
-"""Claims of §IV "Results" (the fitting protocol), §IV-A "Mesh Input Data" (Fig 3: bunny res4) and Fig 7, graded on
+"""Claims of §IV "Results" (the fitting protocol), §IV-A "Mesh Input Data" (Fig 3: bunny res4) and Fig 5, graded on
 likelihood.csv (10 seeds per input, EM, start and K) and convergence.csv.
 
 Each comparison is a difference of two means over seeds, tied within twice its standard error
@@ -103,7 +103,7 @@ def _count_by_input(rows):
     return ", ".join(f"{name} {count}" for name, count in sorted(counts.items(), key=lambda item: -item[1]))
 
 
-# -- §IV-A, Fig 3 and Fig 7 -----------------------------------------------------------------------------------------
+# -- §IV-A, Fig 3 and Fig 5 -----------------------------------------------------------------------------------------
 
 def fig3_values(data):
     """§IV-A, Fig 3: exact triangles with k-means reach 7.45 / 8.15 / 8.62 at K = 25 / 100 / 400 (the authors'
@@ -216,17 +216,17 @@ def points_prefer_an_init(data):
                                  "initialisation"), _POINTS, False, "often")
 
 
-FIG7_K = 100
-"""Fig 7's mixtures: K = 100, k-means, 25 iterations."""
+FIG5_K = 100
+"""Fig 5's mixtures: K = 100, k-means, 25 iterations."""
 
 
 def fuller_model(data):
-    """§IV-A, Fig 7: "the mesh GMM produces a fuller model of the Stanford Bunny than the center-of-mass GMM, even
+    """§IV-A, Fig 5: "the mesh GMM produces a fuller model of the Stanford Bunny than the center-of-mass GMM, even
     when the evaluated likelihood was numerically very similar"."""
-    args = ("§IV-A", "Fig 7", "The mesh GMM is a fuller model than the centroid GMM at a similar likelihood")
-    rule = (f"comparison: K={FIG7_K}, k-means, exact − centroids' share of evaluation points inside a component's "
+    args = ("§IV-A", "Fig 5", "The mesh GMM is a fuller model than the centroid GMM at a similar likelihood")
+    rule = (f"comparison: K={FIG5_K}, k-means, exact − centroids' share of evaluation points inside a component's "
             "2σ ellipsoid > 0")
-    rows = [row for row in data.convergence or [] if int(row["K"]) == FIG7_K and row["init"] == "kmeans"]
+    rows = [row for row in data.convergence or [] if int(row["K"]) == FIG5_K and row["init"] == "kmeans"]
 
     def measured(name, variant, column):
         return estimate([float(row[column]) for row in rows if row["input"] == name and row["variant"] == variant])
@@ -244,7 +244,7 @@ def fuller_model(data):
     grades, lines = graded_per_em(
         comparisons_of, EVERY, lambda *_: Cause("Cause not found: convergence.csv measures only coverage and "
                                                 "likelihood."),
-        f"convergence.csv with res4-exact and res4-centroids at K={FIG7_K}, k-means (config section "
+        f"convergence.csv with res4-exact and res4-centroids at K={FIG5_K}, k-means (config section "
         "`checks.convergence`)")
     return Claim(*args, rule, "; ".join(lines) + ".", grades, "fuller, likelihood very similar")
 

@@ -1,4 +1,4 @@
-"""Claims of §VI-A "Mesh Registration" (its setup, Fig 5 and Fig 5's caption) and §VI-B "Analysis of Mesh
+"""Claims of §VI-A "Mesh Registration" (its setup, Fig 6 and Fig 6's caption) and §VI-B "Analysis of Mesh
 Registration", graded on registration.csv (bunny res4, the scaled trial protocol), the optimisers check and the
 timing check.
 
@@ -19,21 +19,21 @@ from dgmm.experiments.report.claims.rules import (ERROR_NAMES, NOTEBOOK, SIMILAR
                                                   WRONG_MINIMUM_DEG, Cause, Claim, conjoined, em, graded_share, missing,
                                                   pending, per_variant, same, sentence, unwon, wrong_minima)
 from dgmm.experiments.report.claims.timings import MIN_REPEATS, beside, timing_claim
-from dgmm.experiments.report.tables import FIG5_MESH
+from dgmm.experiments.report.tables import FIG6_MESH
 
-FIG5_METHODS = ("mesh-kmeans", "mesh-random", "points-kmeans", "points-random", "icp", "cpd")
-"""The methods of the paper's Fig 5 (ours also has coarse-to-fine P2D, which the paper does not)."""
+FIG6_METHODS = ("mesh-kmeans", "mesh-random", "points-kmeans", "points-random", "icp", "cpd")
+"""The methods of the paper's Fig 6 (ours also has coarse-to-fine P2D, which the paper does not)."""
 OURS = ("mesh-kmeans", "mesh-random")
-""""Our method" of §VI-B: P2D on the mesh GMM, from either start (Fig 5 shows both)."""
+""""Our method" of §VI-B: P2D on the mesh GMM, from either start (Fig 6 shows both)."""
 OTHERS = ("points-kmeans", "points-random", "icp", "cpd")
 """What §VI-B compares our method with: the points GMM (from either start) and the baselines ICP and CPD."""
 POINTS = ("points-kmeans", "points-random")
 UNITS = {"rot": "°", "trans": "%"}
-WHAT = "registration.csv (config section `registration`, experiment fig5)"
+WHAT = "registration.csv (config section `registration`, experiment fig6)"
 OPTIMISERS = "optimisers.csv (config section `checks.optimisers`)"
 
-FIG5_POINTS, FIG5_COMPONENTS = 453, 100
-"""Fig 5's caption: N = 453 source points, K = 100 components."""
+FIG6_POINTS, FIG6_COMPONENTS = 453, 100
+"""Fig 6's caption: N = 453 source points, K = 100 components."""
 
 
 def _quartile(q):
@@ -57,11 +57,11 @@ def _mean_above(q):
 
 
 def _errors(data, variant):
-    """``method -> {"rot": array, "trans": array}`` of Fig 5's methods on bunny res4 (None: not configured)."""
+    """``method -> {"rot": array, "trans": array}`` of Fig 6's methods on bunny res4 (None: not configured)."""
     errors = data.errors(variant)
     if errors is None:
         return None
-    return {method: errors[(*FIG5_MESH, method)] for method in FIG5_METHODS if (*FIG5_MESH, method) in errors}
+    return {method: errors[(*FIG6_MESH, method)] for method in FIG6_METHODS if (*FIG6_MESH, method) in errors}
 
 
 def _table(errors, statistic):
@@ -142,17 +142,17 @@ def _cpd_work(data):
     """Why CPD and the paper's P2D differ in time, from their deterministic work counts (registration.csv's CPD
     iterations, optimisers.csv's cost evaluations of BFGS with forward differences)."""
     iterations = [float(row["iterations"]) for row in data.registration or [] if row["method"] == "cpd"
-                  and (row["model"], row["mesh"]) == FIG5_MESH and row.get("protocol", "scaled") == "scaled"]
+                  and (row["model"], row["mesh"]) == FIG6_MESH and row.get("protocol", "scaled") == "scaled"]
     evaluations = [int(row["evaluations"]) for row in data.optimisers or []
                    if (row["optimiser"], row["rotation"]) == ("BFGS", "quaternion")]
     if not (iterations and evaluations):
         return Cause("Cause not found (registration.csv's CPD iterations or optimisers.csv's P2D evaluations "
                      "missing).")
-    cpd, p2d = np.mean(iterations) * FIG5_POINTS ** 2, np.median(evaluations) * FIG5_POINTS * FIG5_COMPONENTS
+    cpd, p2d = np.mean(iterations) * FIG6_POINTS ** 2, np.median(evaluations) * FIG6_POINTS * FIG6_COMPONENTS
     return Cause(f"The work differs: CPD does {cpd / p2d:.2g} times the pairwise work of the paper's P2D per trial.",
-                 f"CPD (pyCPD) runs a mean of {np.mean(iterations):.0f} iterations a trial over all {FIG5_POINTS}² "
+                 f"CPD (pyCPD) runs a mean of {np.mean(iterations):.0f} iterations a trial over all {FIG6_POINTS}² "
                  f"point pairs, P2D with numerical differences a median of {np.median(evaluations):.0f} cost "
-                 f"evaluations over {FIG5_POINTS} points × {FIG5_COMPONENTS} components: CPD does {cpd / p2d:.2g} "
+                 f"evaluations over {FIG6_POINTS} points × {FIG6_COMPONENTS} components: CPD does {cpd / p2d:.2g} "
                  "times P2D's pairwise work")
 
 
@@ -166,22 +166,22 @@ def cpd_matches_p2d_runtime(data):
     return beside(claim, data, check, ("cpd", "p2d"), "ours (analytic gradient)")
 
 
-# §VI-A: Fig 5 and its caption ----------------------------------------------------------------------------------
+# §VI-A: Fig 6 and its caption ----------------------------------------------------------------------------------
 
 def _decimals(value):
     """Decimal places of a published value as printed (0.067 -> 3)."""
     return len(repr(value).partition(".")[2])
 
 
-def _fig5_comparisons(errors):
+def _fig6_comparisons(errors):
     """``(method, error) -> Comparison``: each mean of ``errors`` against the notebook's, printed to its decimals."""
     return {(m, name): versus_paper(f"{m} {ERROR_NAMES[name]}", bootstrap(np.mean, errors[m][name]), value,
                                     _decimals(value))
-            for m in errors for name, value in zip(ERROR_NAMES, paper.FIG5_MEANS[m])}
+            for m in errors for name, value in zip(ERROR_NAMES, paper.FIG6_MEANS[m])}
 
 
-def _fig5_cause(comparisons, elsewhere):
-    """Cause of the Fig 5 means that miss the paper's: those another EM's mixtures match (``elsewhere``: ``variant ->
+def _fig6_cause(comparisons, elsewhere):
+    """Cause of the Fig 6 means that miss the paper's: those another EM's mixtures match (``elsewhere``: ``variant ->
     comparisons``), and the rest."""
     missed = [key for key, c in comparisons.items() if c.outcome == LOSS]
     matched = {key: variant for key in missed for variant, others in elsewhere.items()
@@ -201,35 +201,35 @@ def _fig5_cause(comparisons, elsewhere):
     return Cause(sentence("; ".join(parts)), "; ".join(found))
 
 
-def fig5_means_match(data):
-    """Fig 5: the per-method mean errors (the authors' notebook numbers; the paper's figure is an image)."""
-    args = ("§VI-A", "Fig 5", "Our mean errors match the paper's per method")
+def fig6_means_match(data):
+    """Fig 6: the per-method mean errors (the authors' notebook numbers; the paper's figure is an image)."""
+    args = ("§VI-A", "Fig 6", "Our mean errors match the paper's per method")
     rule = ("equivalence, plain: one (method, error), our mean within its tie band (bootstrap) plus the rounding of "
             "the notebook's")
-    published = "; ".join(f"{m} {r}° / {t}%" for m, (r, t) in paper.FIG5_MEANS.items())
+    published = "; ".join(f"{m} {r}° / {t}%" for m, (r, t) in paper.FIG6_MEANS.items())
 
     def grade(variant):
         errors = _errors(data, variant)
         if not errors:
             return missing(WHAT)
-        comparisons = _fig5_comparisons(errors)
-        elsewhere = {v: _fig5_comparisons(_errors(data, v) or {}) for v in VARIANTS if v != variant}
-        return graded_share(comparisons.values(), PLAIN, _fig5_cause(comparisons, elsewhere),
+        comparisons = _fig6_comparisons(errors)
+        elsewhere = {v: _fig6_comparisons(_errors(data, v) or {}) for v in VARIANTS if v != variant}
+        return graded_share(comparisons.values(), PLAIN, _fig6_cause(comparisons, elsewhere),
                             _table(errors, np.mean) + unwon(comparisons.values()))
 
     grades, lines = per_variant(grade)
     return Claim(*args, rule, f"paper: {published}; ours, mean rotation / translation errors, {' — '.join(lines)}.",
-                 grades, "Fig 5's means", NOTEBOOK)
+                 grades, "Fig 6's means", NOTEBOOK)
 
 
 TRANSLATION_LIMIT = 1.1
-"""Fig 5's caption: "better than 1.1% of the model size"."""
+"""Fig 6's caption: "better than 1.1% of the model size"."""
 
 
 def all_within_model_size(data):
-    """Fig 5's caption: "all reported methods have position error, on average, better than 1.1% of the model
+    """Fig 6's caption: "all reported methods have position error, on average, better than 1.1% of the model
     size"."""
-    args = ("§VI-A", "Fig 5", f"Every method's mean translation error is below {TRANSLATION_LIMIT}% of the model size")
+    args = ("§VI-A", "Fig 6", f"Every method's mean translation error is below {TRANSLATION_LIMIT}% of the model size")
     rule = f"share, every: one method, mean translation error < {TRANSLATION_LIMIT}% (band: bootstrap)"
 
     def grade(variant):
@@ -256,9 +256,9 @@ def _wrong_minima_counts(errors):
 
 
 def outliers_raise_means(data):
-    """Fig 5's caption: "Some methods have outliers that converged to the wrong local minima, and hence have a very
+    """Fig 6's caption: "Some methods have outliers that converged to the wrong local minima, and hence have a very
     large mean relative to their distribution"."""
-    args = ("§VI-A", "Fig 5", "Methods with trials in wrong local minima have a mean above their box")
+    args = ("§VI-A", "Fig 6", "Methods with trials in wrong local minima have a mean above their box")
     rule = (f"share, plain: some method has trials beyond {WRONG_MINIMUM_DEG:g}° (wrong minima); one (such method, "
             "error), mean > Q3 (band: bootstrap)")
 
@@ -326,16 +326,16 @@ def _beaten(comparisons):
 def mesh_registers_best(data):
     """§VI-B: "our mesh-derived Gaussian Mixture Model provides improved registration results when using P2D compared
     to the existing baselines, ICP and CPD. Not only does our method produce better registration on average, ..."
-    (Fig 5 also shows the points GMM)."""
-    return _versus_others(data, ("§VI-B", "Fig 5", "The mesh GMM registers better on average than the points GMM, "
+    (Fig 6 also shows the points GMM)."""
+    return _versus_others(data, ("§VI-B", "Fig 6", "The mesh GMM registers better on average than the points GMM, "
                                                    "ICP and CPD"),
                           "share, plain: one (mesh GMM start, error, other method), mean error < the other's (band: "
                           "paired bootstrap)", {"": np.mean}, ("mean error", np.mean), "improved, better on average")
 
 
 def better_distribution(data):
-    """§VI-B: "... but it also demonstrates a better distribution of errors" (Fig 5's boxes: quartiles)."""
-    return _versus_others(data, ("§VI-B", "Fig 5", "The mesh GMM's errors are better distributed: its quartiles are "
+    """§VI-B: "... but it also demonstrates a better distribution of errors" (Fig 6's boxes: quartiles)."""
+    return _versus_others(data, ("§VI-B", "Fig 6", "The mesh GMM's errors are better distributed: its quartiles are "
                                                    "lower"),
                           "share, plain: one (mesh GMM start, error, other method, quartile Q1, Q2, Q3), the mesh "
                           "GMM's < the other's (band: paired bootstrap)",
@@ -346,7 +346,7 @@ def better_distribution(data):
 def less_prone_to_outliers(data):
     """§VI-B: "the small difference between the median and mean errors shows that our method is less prone to
     outliers"."""
-    return _versus_others(data, ("§VI-B", "Fig 5", "The mesh GMM's mean is close to its median: fewer outliers than "
+    return _versus_others(data, ("§VI-B", "Fig 6", "The mesh GMM's mean is close to its median: fewer outliers than "
                                                    "the others"),
                           "share, plain: one (mesh GMM start, error, other method), (mean − median) / median < the "
                           "other's (band: paired bootstrap)", {"": _excess}, ("(mean − median) / median", _excess),
@@ -356,7 +356,7 @@ def less_prone_to_outliers(data):
 def points_mean_towards_worst_quartile(data):
     """§VI-B: "the point-based GMM P2D registration results had outliers that dragged the mean towards the worst
     quartile of results"."""
-    args = ("§VI-B", "Fig 5", "The points GMMs' outliers drag their mean towards the worst quartile")
+    args = ("§VI-B", "Fig 6", "The points GMMs' outliers drag their mean towards the worst quartile")
     rule = "share, plain: one (points GMM, error), mean error > median (band: bootstrap); context: how far to Q3"
     errors = _errors(data, "textbook") or {}
     if not set(POINTS) & errors.keys():
@@ -377,7 +377,7 @@ def points_mean_towards_worst_quartile(data):
 def points_random_mean_three_medians(data):
     """§VI-B: "The randomly initialized point-based GMM had a mean that was about three times that of its median
     result"."""
-    args = ("§VI-B", "Fig 5", "The random-start points GMM's mean error is about three times its median")
+    args = ("§VI-B", "Fig 6", "The random-start points GMM's mean error is about three times its median")
     rule = ("equivalence, plain: one error, mean / median within 3 ± its tie band (bootstrap) plus rounding to a whole "
             "number")
     errors = (_errors(data, "textbook") or {}).get("points-random")
@@ -399,7 +399,7 @@ def points_random_mean_three_medians(data):
 def incorrect_local_minima(data):
     """§VI-B: the random-start points GMM's mean, about three times its median, "suggesting that some experiments
     produced results in the incorrect local minima"."""
-    args = ("§VI-B", "Fig 5", "Some random-start points GMM trials end in wrong local minima")
+    args = ("§VI-B", "Fig 6", "Some random-start points GMM trials end in wrong local minima")
     rule = (f"comparison: points-random trials with rotation error > {WRONG_MINIMUM_DEG:g}° (beyond any trial's "
             "start) > 0; context: its mean without them")
     errors = (_errors(data, "textbook") or {}).get("points-random")
@@ -419,6 +419,6 @@ def incorrect_local_minima(data):
 
 
 CLAIMS = (cg_similar_to_bfgs, bfgs_faster_than_cg, rotvec_same_as_quaternion, cpd_matches_p2d_runtime,
-          fig5_means_match, all_within_model_size, outliers_raise_means, mesh_registers_best, better_distribution,
+          fig6_means_match, all_within_model_size, outliers_raise_means, mesh_registers_best, better_distribution,
           less_prone_to_outliers, points_mean_towards_worst_quartile, points_random_mean_three_medians,
           incorrect_local_minima)

@@ -12,7 +12,7 @@ from dgmm.experiments.report.claims.grading import (EVERY, LOSS, OFTEN_WORDS, PL
 from dgmm.experiments.report.claims.rules import (ERROR_NAMES, TEXT, WORDS, WRONG_MINIMUM_DEG, Cause, Claim, conjoined,
                                                   fitted_variant, graded_share, missing, per_variant, unwon,
                                                   wrong_minima)
-from dgmm.experiments.report.tables import FIG5_MESH, TABLE1_FIT, TABLE1_INPUTS, TABLE1_METHODS, table1_mesh
+from dgmm.experiments.report.tables import FIG6_MESH, TABLE1_FIT, TABLE1_INPUTS, TABLE1_METHODS, table1_mesh
 
 KINDS = ("points", "mesh")
 """Table 1's two GMMs: fitted to the vertices and to the triangles."""
@@ -113,8 +113,8 @@ def _decimation_cause(data, variant, comparisons):
     res4) is the one the authors used, against the models decimated by our data stage."""
     fits = _likelihoods(data, variant)
     outcomes = {(c.label.split()[0], c.label.split()[1]): c.outcome for c in comparisons}
-    bunny = [key for key in outcomes if key[0] == FIG5_MESH[0]]
-    decimated = [key for key in outcomes if key[0] != FIG5_MESH[0]]
+    bunny = [key for key in outcomes if key[0] == FIG6_MESH[0]]
+    decimated = [key for key in outcomes if key[0] != FIG6_MESH[0]]
     missed = [key for key in decimated if outcomes[key] == LOSS]
     below = sum(fits[m][kind].value < paper.TABLE1[m][COLUMNS["ll", kind]] for m, kind in missed)
     matches = lambda keys: sum(outcomes[key] == WIN for key in keys)  # noqa: E731
@@ -226,11 +226,11 @@ def registration_margins(data):
 
 def _icp_cause(data, variant, comparisons):
     """Cause of registration values that miss the paper's: not found; what was tried, with our ICP against the
-    paper's on the bunny (the one model whose absolute errors the paper gives, Fig 5's notebook means)."""
-    icp = (data.errors(variant) or {}).get((*FIG5_MESH, "icp"))
+    paper's on the bunny (the one model whose absolute errors the paper gives, Fig 6's notebook means)."""
+    icp = (data.errors(variant) or {}).get((*FIG6_MESH, "icp"))
     scale = "" if icp is None else (
-        "; ICP: on the bunny, the one model with the paper's absolute errors (Fig 5), our ICP's mean errors are "
-        + " / ".join(f"{np.mean(icp[name]) / value:.2f}" for name, value in zip(ERROR_NAMES, paper.FIG5_MEANS["icp"]))
+        "; ICP: on the bunny, the one model with the paper's absolute errors (Fig 6), our ICP's mean errors are "
+        + " / ".join(f"{np.mean(icp[name]) / value:.2f}" for name, value in zip(ERROR_NAMES, paper.FIG6_MEANS["icp"]))
         + " times the paper's")
     return Cause("Cause not found (tried both EMs' mixtures; the points GMM and ICP are the same in both).",
                  f"not found (tried: both EMs' mixtures, the points GMM and ICP being the same in both{scale})")
