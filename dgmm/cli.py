@@ -380,6 +380,10 @@ def _view_arguments(parser):
 # odometry
 # ---------------------------------------------------------------------------------------------------------
 
+ODOMETRY_PROTOCOLS = ("ours", "authors-patch", "authors-disparity")
+"""``dgmm.odometry.protocols.PROTOCOLS``' names, written out: importing it would load the odometry package at start."""
+
+
 def _odometry(args):
     """Frame-to-frame odometry of a TUM folder or a ROS 2 recording: the trajectory file, optional recordings, the
     metrics as JSON."""
@@ -400,10 +404,11 @@ def _odometry(args):
         raise DataError(f"{args.sequence}: odometry needs at least 2 depth frames, got {n_frames}")
     frames, groundtruth = first_frames(sequence, n_frames, require_groundtruth=False)
     options = dict(intrinsics=intrinsics, variant=args.variant, seed=args.seed, schedule=args.schedule,
-                   warm_iter=args.warm_iter or None)
+                   warm_iter=args.warm_iter or None, protocol=args.protocol)
     params = {"dgmm_version": __version__, "sequence": sequence.name, "folder": str(args.sequence),
               "depth_topic": args.depth_topic, "method": args.method, "frames": n_frames, "intrinsics": camera,
-              "variant": args.variant, "schedule": args.schedule, "warm_iter": args.warm_iter, "seed": args.seed}
+              "variant": args.variant, "schedule": args.schedule, "warm_iter": args.warm_iter, "seed": args.seed,
+              "protocol": args.protocol}
     with ExitStack() as stack:
         bar = stack.enter_context(_progress_bar(n_frames, desc="odometry", unit="frame"))
         recorder = None
@@ -425,7 +430,8 @@ def _odometry(args):
             write_trajectory(args.output, result.trajectory,
                              header=f"dgmm {args.method} odometry of {sequence.name}, intrinsics {camera}")
     seconds = float(result.prepare_seconds.mean() + result.registration_seconds.mean())
-    print(json.dumps({"sequence": sequence.name, "method": args.method, "variant": args.variant,
+    print(json.dumps({"sequence": sequence.name, "method": args.method, "protocol": args.protocol,
+                      "variant": args.variant,
                       "intrinsics": camera, "frames": n_frames, **metrics, "seconds_per_frame": seconds,
                       "cpu_seconds_per_frame": float(result.cpu_seconds.mean())}))
 
@@ -459,6 +465,11 @@ def _odometry_arguments(parser):
                              "mixtures, D2D of the whole mixtures), common-view (both frames refitted on their common "
                              "view: robust under the fastest turns, 5x the CPU) or reference (k-means + 25 EM "
                              "iterations, BFGS) (default: %(default)s)")
+    parser.add_argument("--protocol", choices=ODOMETRY_PROTOCOLS, default="ours",
+                        help="ours: --schedule, --variant and pixel rectangles sized by their footprint; "
+                             "authors-patch, authors-disparity: the authors' notebooks (gmm-pixels of size 1, flat "
+                             "patch or disparity-box covariance, scikit-learn GaussianMixture(100) defaults, BFGS "
+                             "D2D; ~10x the CPU per frame; --schedule and --variant unused) (default: %(default)s)")
     parser.add_argument("--warm-iter", type=_seed, default=0, metavar="N",
                         help="EM iterations of every frame after the first, started from the previous frame's "
                              "mixture; 0 fits every frame by its schedule (default: %(default)s; a warm start "

@@ -12,6 +12,7 @@ from matplotlib.figure import Figure
 from dgmm.errors import InputError
 from dgmm.files import atomic_path
 from dgmm.odometry.metrics import absolute_trajectory_error
+from dgmm.odometry.protocols import PROTOCOLS
 from dgmm.odometry.tum import MAX_TIME_DIFFERENCE, read_trajectory
 
 PLANES = {"xy": (0, 1), "xz": (0, 2), "yz": (1, 2)}
@@ -27,12 +28,18 @@ METHOD_STYLE = {
 VARIANT_LINE = {"": ":", "textbook": "-", "authors": "--"}
 """EM variant of a run (``""``: none, ICP) -> line style."""
 
+PROTOCOL_LINE = {"authors-patch": "-.", "authors-disparity": (0, (6, 2, 1, 2, 1, 2))}
+"""An authors' protocol of a run (``dgmm.odometry.protocols``) -> line style."""
+
 
 def _run_style(run):
-    """(label, colour, line style) of a run named ``method`` or ``method-variant`` (``dgmm.odometry.odometry_runs``)."""
+    """(label, colour, line style) of a run named ``method``, ``method-variant`` or ``method-protocol``
+    (``dgmm.odometry.odometry_runs``)."""
     method = max((name for name in METHOD_STYLE if run.startswith(name)), key=len, default=run)
     variant = run[len(method) + 1:]
     label, color = METHOD_STYLE.get(method, (method, None))
+    if variant in PROTOCOLS:  # a run of an authors' protocol (dgmm.odometry.protocols.protocol_runs)
+        return f"{label}, {variant} protocol", color, PROTOCOL_LINE.get(variant, "-.")
     return (f"{label}, {variant} EM" if variant else label), color, VARIANT_LINE.get(variant, "-.")
 
 

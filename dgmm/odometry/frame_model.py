@@ -25,7 +25,9 @@ from dgmm.mixture import GaussianMixture
 from dgmm.odometry.em_start import lloyd_start
 from dgmm.odometry.measured_cut import MeasuredFrame, register_cut_rounds
 from dgmm.odometry.overlap import register_d2d_common_view, register_d2d_overlap
+from dgmm.odometry.protocols import OURS, protocol_runs
 from dgmm.odometry.pixels import PIXEL_STEP, backproject, pixel_primitives
+from dgmm.odometry.sklearn_em import SKLEARN_MAX_ITER, SKLEARN_TOL, fit_sklearn_defaults
 from dgmm.primitives import Primitives
 from dgmm.registration import register_d2d, register_icp
 
@@ -112,6 +114,10 @@ class Schedule:
         (:func:`dgmm.odometry.measured_cut.register_cut_rounds`): what only one frame measured pulls D2D toward the
         identity, and a cut at a pose some centimetres off keeps part of that pull, so each round removes most of
         what is left of it.
+    em_tol : float or None, default=None
+        None: EM runs ``em_iter`` iterations (a k-means start: until its bound moves by less than 1e-12). A number
+        (with ``seed_sample`` None): scikit-learn's ``GaussianMixture`` stopping rule at that ``tol``, up to
+        ``em_iter`` iterations (:func:`dgmm.odometry.sklearn_em.fit_sklearn_defaults`).
     """
 
     seed_sample: int | None
@@ -122,8 +128,12 @@ class Schedule:
     overlap_scales: tuple = (0.0,)
     overlap_refits: int = 0
     cut_rounds: int = 0
+    em_tol: float | None = None
 
     def __post_init__(self):
+        if self.em_tol is not None and self.seed_sample is not None:
+            raise InputError(f"em_tol {self.em_tol} is scikit-learn's stopping rule: it needs the k-means start "
+                             "(seed_sample None)")
         if self.overlap_scales[-1] != 0.0 and not self.cut_rounds:
             raise InputError(f"overlap_scales {self.overlap_scales} end widened: they need cut rounds after them")
 
@@ -136,6 +146,7 @@ SCHEDULES = {
     "common-view": replace(_FAST, overlap_rounds=2, overlap_scales=(0.25, 0.125, 0.0625, 0.03125, 0.0),
                            overlap_refits=2),
     "reference": Schedule(seed_sample=None, lloyd_iter=0, em_iter=25, solver="bfgs"),
+    "authors": Schedule(seed_sample=None, lloyd_iter=0, em_iter=SKLEARN_MAX_ITER, solver="bfgs", em_tol=SKLEARN_TOL),
 }
 """Named per-frame schedules, chosen by measurement (benchmarks/studies/odometry_schedules.py,
 benchmarks/studies/odometry_rotation_room.py; the docs' Visual odometry section). ``"fast"``: k-means++ seeds from 1,024
@@ -147,7 +158,11 @@ again (``cut_rounds``): what only one frame measured no longer pulls the estimat
 ``"common-view"``: two overlap rounds at each of five widenings, then both frames refitted twice on the primitives
 the other camera sees (robust where views change fastest, at about five times the CPU). ``"reference"``:
 scikit-learn's k-means on every primitive, 25 EM iterations (the fitting experiments' count; the paper does not state
-the odometry's) and the paper's BFGS."""
+the odometry's) and the paper's BFGS. ``"authors"``: the authors' notebooks' per-frame fit, scikit-learn's
+``GaussianMixture(100)`` at its defaults (k-means start, up to 100 iterations, ``tol`` 1e-3;
+:mod:`dgmm.odometry.sklearn_em`), and BFGS D2D of the whole mixtures from the identity (``reg_results.ipynb``); with
+unit pixel sizes and a ``patch`` or ``disparity`` covariance it is the authors' protocol
+(:mod:`dgmm.odometry.protocols`)."""
 
 
 def _fit_mixture(prims, rng, previous, options):
@@ -162,6 +177,9 @@ def _fit_mixture(prims, rng, previous, options):
         weights, means, precisions = _warm_start(previous, prims, rng)
         return GaussianMixture(k, max_iter=options["warm_iter"], weights_init=weights, means_init=means,
                                precisions_init=precisions, **common).fit(prims)
+    if schedule.em_tol is not None:
+        return fit_sklearn_defaults(prims, k, rng, max_iter=schedule.em_iter, tol=schedule.em_tol,
+                                    **{key: value for key, value in common.items() if key != "random_state"})
     if schedule.seed_sample is None:
         return GaussianMixture(k, max_iter=schedule.em_iter, **common).fit(prims)
     weights, means, precisions = lloyd_start(prims, k, schedule.seed_sample, schedule.lloyd_iter, options["variant"],
@@ -184,7 +202,7 @@ def _view_mixture(prims, depth, intrinsics, rng, previous, options):
 
 
 def _prepare_pixels(depth, intrinsics, rng, previous, options):
-    prims = pixel_primitives(depth, intrinsics, size=options["size"])
+    prims = pixel_primitives(depth, intrinsics, size=options["size"], covariance=options.get("covariance", "patch"))
     return _view_mixture(prims, depth, intrinsics, rng, previous, options)
 
 
@@ -252,7 +270,7 @@ E-step scale ``alpha / min(alpha)`` is 1 and their unweighted M-step is the text
 only, as the registration's point mixtures do (``dgmm.experiments.trials.method_variants``)."""
 
 
-def odometry_runs(methods, variants):
+def odometry_runs(methods, variants, protocols=(OURS,)):
     """The (method, variant) pairs of a sweep, named as its jobs' folders.
 
     Parameters
@@ -262,16 +280,23 @@ def odometry_runs(methods, variants):
     variants : sequence of str
         EM variants of the mixture methods of sized primitives (gmm-pixels); :data:`UNSIZED_METHODS` run textbook
         EM only and ICP has none.
+    protocols : sequence of str, default=("ours",)
+        Keys of :data:`dgmm.odometry.protocols.PROTOCOLS`: ``"ours"`` runs every method with every variant as
+        above; each of the authors' protocols adds a run per method it applies to
+        (:func:`dgmm.odometry.protocols.protocol_runs`; :func:`dgmm.odometry.protocols.run_protocol` tells a run's
+        protocol from its name).
 
     Returns
     -------
     runs : dict of str to (str, str)
-        ``"gmm-pixels-textbook" -> ("gmm-pixels", "textbook")`` …, ``"icp" -> ("icp", "")``, in the given order.
+        ``"gmm-pixels-textbook" -> ("gmm-pixels", "textbook")`` …, ``"icp" -> ("icp", "")``, then
+        ``"gmm-pixels-authors-patch" -> ("gmm-pixels", "authors")`` …, in the given order.
     """
     def method_variants(method):
         if method not in MIXTURE_METHODS:
             return [""]
         return ["textbook"] if method in UNSIZED_METHODS else list(variants)
 
-    return {f"{method}-{variant}" if variant else method: (method, variant)
-            for method in methods for variant in method_variants(method)}
+    ours = {f"{method}-{variant}" if variant else method: (method, variant)
+            for method in methods for variant in method_variants(method)} if OURS in protocols else {}
+    return {**ours, **protocol_runs(protocols, methods)}

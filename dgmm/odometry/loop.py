@@ -18,6 +18,7 @@ import numpy as np
 from dgmm.errors import DataError, InputError
 from dgmm.odometry.frame_model import METHODS, SCHEDULES, Schedule
 from dgmm.odometry.pixels import FR3
+from dgmm.odometry.protocols import PROTOCOLS, check_protocol
 from dgmm.odometry.tum import Trajectory
 from dgmm.registration import Registration
 
@@ -88,7 +89,8 @@ class Odometry:
 
 
 def run_odometry(sequence, method, frames=None, *, intrinsics=FR3, n_components=100, schedule="overlap", warm_iter=None,
-                 variant="textbook", size="area", n_icp_points=2500, icp_tol=1e-9, seed=0, callback=None):
+                 variant="textbook", size="area", covariance="patch", protocol="ours", n_icp_points=2500, icp_tol=1e-9,
+                 seed=0, callback=None):
     """Frame-to-frame visual odometry over a depth sequence (paper §VI-D).
 
     Each frame's model is built once (a GMM, or ICP's random points) and registered onto the previous frame's
@@ -115,6 +117,12 @@ def run_odometry(sequence, method, frames=None, *, intrinsics=FR3, n_components=
         The EM (``dgmm.GaussianMixture``'s ``variant``).
     size : {"area", "unit"}
         Pixel primitive size for ``"gmm-pixels"`` (see ``dgmm.odometry.pixels.pixel_primitives``).
+    covariance : {"patch", "disparity"}
+        Pixel primitive covariance for ``"gmm-pixels"`` (``dgmm.odometry.pixel_covariance``).
+    protocol : str, default="ours"
+        A key of ``dgmm.odometry.protocols.PROTOCOLS``: ``"ours"`` runs with the arguments above; an authors'
+        protocol (``"authors-patch"``, ``"authors-disparity"``; ``"gmm-pixels"`` only) replaces ``schedule``,
+        ``size`` and ``covariance`` with its own (``variant`` is one algorithm on its unit sizes).
     n_icp_points : int
         Points drawn per frame for ``"icp"`` (paper: 2,500).
     icp_tol : float
@@ -135,6 +143,11 @@ def run_odometry(sequence, method, frames=None, *, intrinsics=FR3, n_components=
     """
     if method not in METHODS:
         raise InputError(f"method must be one of {sorted(METHODS)}, got {method!r}")
+    settings = PROTOCOLS[check_protocol(protocol)]
+    if settings is not None:
+        if method not in settings.methods:
+            raise InputError(f"protocol {protocol!r} applies to {', '.join(settings.methods)}, not {method!r}")
+        schedule, size, covariance = settings.schedule, settings.size, settings.covariance
     if not isinstance(schedule, Schedule) and schedule not in SCHEDULES:
         raise InputError(f"schedule must be one of {sorted(SCHEDULES)} or a Schedule, got {schedule!r}")
     if warm_iter is not None and warm_iter < 1:
@@ -145,7 +158,8 @@ def run_odometry(sequence, method, frames=None, *, intrinsics=FR3, n_components=
     prepare, register = METHODS[method]
     options = {"n_components": n_components, "warm_iter": warm_iter,
                "schedule": schedule if isinstance(schedule, Schedule) else SCHEDULES[schedule], "variant": variant,
-               "size": size, "n_icp_points": n_icp_points, "icp_tol": icp_tol, "intrinsics": intrinsics}
+               "size": size, "covariance": covariance, "n_icp_points": n_icp_points, "icp_tol": icp_tol,
+               "intrinsics": intrinsics}
     rotations, translations = [np.eye(3)], [np.zeros(3)]
     previous, prepare_seconds, registrations, registration_seconds, cpu_seconds = None, [], [], [], []
     # sequential by nature: each pose composes the previous one; frames stream from the sequence one at a time

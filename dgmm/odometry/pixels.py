@@ -11,6 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from dgmm.errors import InputError
+from dgmm.odometry.pixel_covariance import PIXEL_COVARIANCES
 from dgmm.primitives import Primitives
 
 PIXEL_STEP = 4
@@ -169,11 +170,14 @@ def _area_sizes(width_x, width_y):
 PIXEL_SIZES = {"area": _area_sizes, "unit": _unit_sizes}
 
 
-def pixel_primitives(depth, intrinsics=FR3, step=PIXEL_STEP, size="area"):
-    """Every ``step``-th pixel as a camera-aligned rectangle primitive (paper §VI-D, the uncertainty primitive).
+def pixel_primitives(depth, intrinsics=FR3, step=PIXEL_STEP, size="area", covariance="patch"):
+    """Every ``step``-th pixel as a primitive (paper §VI-D, the uncertainty primitive): its back-projected point,
+    a covariance and a size.
 
     The pixel block seen at depth ``Z`` covers ``w_x = step Z / fx`` by ``w_y = step Z / fy`` metres; the
-    uniform distribution over that rectangle has covariance ``diag(w_x² / 12, w_y² / 12, 0)`` in the camera frame.
+    uniform distribution over that rectangle has covariance ``diag(w_x² / 12, w_y² / 12, 0)`` in the camera frame
+    (``"patch"``); ``"disparity"`` is the authors' box from that footprint and a ±1 px disparity error
+    (:mod:`dgmm.odometry.pixel_covariance`).
 
     Parameters
     ----------
@@ -184,7 +188,10 @@ def pixel_primitives(depth, intrinsics=FR3, step=PIXEL_STEP, size="area"):
     size : {"area", "unit"}, default="area"
         ``alpha_p``: the paper defines a primitive's size as its extent ``∫_S dS`` (§"Generalization to other
         primitives"), here the footprint area ``w_x w_y``; this also undoes the ``1/Z²`` density of pixels on
-        the surface. ``"unit"`` counts every pixel once, as the plain points do.
+        the surface. ``"unit"`` counts every pixel once, as the plain points do (and as the authors' odometry
+        notebooks do: ``set_areas(np.ones(n))``).
+    covariance : {"patch", "disparity"}, default="patch"
+        The primitive's covariance (:data:`dgmm.odometry.pixel_covariance.PIXEL_COVARIANCES`).
 
     Returns
     -------
@@ -193,9 +200,9 @@ def pixel_primitives(depth, intrinsics=FR3, step=PIXEL_STEP, size="area"):
     """
     if size not in PIXEL_SIZES:
         raise InputError(f"size must be one of {sorted(PIXEL_SIZES)}, got {size!r}")
+    if covariance not in PIXEL_COVARIANCES:
+        raise InputError(f"covariance must be one of {sorted(PIXEL_COVARIANCES)}, got {covariance!r}")
     points = backproject(depth, intrinsics, step)
     width_x, width_y = step * points[:, 2] / intrinsics.fx, step * points[:, 2] / intrinsics.fy
-    covariances = np.zeros((len(points), 3, 3))
-    covariances[:, 0, 0] = width_x ** 2 / 12.0
-    covariances[:, 1, 1] = width_y ** 2 / 12.0
-    return Primitives(points, covariances, PIXEL_SIZES[size](width_x, width_y))
+    return Primitives(points, PIXEL_COVARIANCES[covariance](points, intrinsics, step),
+                      PIXEL_SIZES[size](width_x, width_y))
