@@ -131,9 +131,10 @@ def test_figures_follow_the_configured_inputs():
     pictures = ["res4", "full", "dense", "random", "clustering", "quadric", "poisson"]
     everything = ["likelihood", "fig2", "registration", *pictures]
     assert figure_names(everything, ["res4-exact", "quadric1000-exact", "bunny/res4"]) == \
-        ["fig1", "fig2", "fig3", "fig4", "fig6", "fig6_authors", "fig5"]
-    assert figure_names(["likelihood", "fig2", "res4"], ["res4-exact"]) == ["fig1", "fig2", "fig3"]
-    assert figure_names(everything, ["res4-exact", "bunny/quadric1000"]) == ["fig1", "fig2", "fig3", "fig5"]
+        ["fig1", "fig2", "fig3", "fig3_authors", "fig4", "fig4_authors", "fig5", "fig6", "fig6_authors"]
+    assert figure_names(["likelihood", "fig2", "res4"], ["res4-exact"]) == ["fig1", "fig2", "fig3", "fig3_authors"]
+    assert figure_names(everything, ["res4-exact", "bunny/quadric1000"]) == ["fig1", "fig2", "fig3", "fig3_authors",
+                                                                              "fig5"]
 
 
 def test_summary_rows_link_each_claim_to_its_section_and_details():
@@ -141,15 +142,18 @@ def test_summary_rows_link_each_claim_to_its_section_and_details():
     evaluated = [claims.Claim("§III-A", "Fig 2", "a", "rule", "evidence", both("reproduced", "1", "ignored"), "2"),
                  claims.Claim("§IV-A", "Fig 3", "b", "rule", "evidence",
                               {"authors": claims.Grade("reproduced", "5"),
-                               "textbook": claims.Grade("partly", "6", "Because of c.")}, "7", NOTEBOOK),
+                               "textbook": claims.Grade("partly", "6", "Because of c.")}, "7", NOTEBOOK,
+                              on_stored=claims.Grade("not reproduced", "0/3 won")),
                  claims.Claim("§I, §VII", "", "d", "rule", "", both("not reproduced", "3", "Because of e."), "4",
                               timings="t")]
     assert layout.figure_anchor("Fig 2") == "fig2" and layout.figure_anchor("") is None
     assert layout.summary_rows(evaluated) == [  # authors' EM (the headline) first; words need no paper column
-        ["§III-A", "[a](#claim-1)", "{{reproduced}} 1", "{{reproduced}} 1", ""],
-        ["§IV-A", "[b](#claim-2)\ntextbook EM: Because of c.", "{{reproduced}} 5", "{{partly}} 6", "7ᴺ"],
-        ["§I, §VII", "[d](#claim-3)\nBecause of e.", "{{not reproduced}} 3", "{{not reproduced}} 3", ""]]
-    assert layout.SUMMARY_HEADER[2:4] == ["authors' EM (headline)", "textbook EM"]
+        ["§III-A", "[a](#claim-1)", "{{reproduced}} 1", "{{reproduced}} 1", "–", ""],
+        ["§IV-A", "[b](#claim-2)\nThe authors' own stored data does not bear it out either (not reproduced).\n"
+                  "textbook EM: Because of c.", "{{reproduced}} 5", "{{partly}} 6", "{{not reproduced}} 0/3 won",
+         "7ᴺ"],
+        ["§I, §VII", "[d](#claim-3)\nBecause of e.", "{{not reproduced}} 3", "{{not reproduced}} 3", "–", ""]]
+    assert layout.SUMMARY_HEADER[2:5] == ["ours, authors' EM (headline)", "ours, textbook EM", "the authors' data"]
     assert "(#timings)" in layout.claim_item(evaluated[2])  # a timing claim's numbers are only there
     page = to_html([("table", ["claim", "verdict"], [row[1:3] for row in layout.summary_rows(evaluated)],
                      "summary")], {}, "T")
@@ -172,7 +176,7 @@ def test_only_the_timing_block_changes_when_only_the_timings_do(tmp_path):
     for index, seconds in enumerate((np.linspace(0.70, 0.80, 11), np.linspace(0.60, 0.85, 11))):
         write_csv(tmp_path / f"timing{index}.csv", timing_rows(seconds))
         loaded = Loaded({"timing_seconds": tmp_path / f"timing{index}.csv"}, seed=0)
-        document = blocks(loaded, [], claims.evaluate(loaded.measurements()))
+        document = blocks(loaded, [], claims.evaluate(loaded.measured))
         pages.append(to_markdown(document))
     assert pages[0] != pages[1] and "median 0.75" in pages[0] and "median 0.725" in pages[1]
     assert layout.without_timings(pages[0]) == layout.without_timings(pages[1])
@@ -193,7 +197,7 @@ def test_markdown_and_html_rendering():
 # ---------------------------------------------------------------------------------------------------------
 
 FIG3_FIG4 = claims.FIG3_INPUTS + claims.FIG4_INPUTS
-FIGURES = ("fig1", "fig2", "fig3", "fig4", "fig6", "fig6_authors", "fig5")
+FIGURES = ("fig1", "fig2", "fig3", "fig3_authors", "fig4", "fig4_authors", "fig5", "fig6", "fig6_authors")
 
 
 def synthetic_results(results):
@@ -305,7 +309,7 @@ def test_report_writes_every_output(built):
     out, first, drawn = built
     names = {str(path) for path in first}
     figures = {f"figures/{name}.png" for name in drawn}
-    assert names == {"report.html", "report.md", "claims.md", "table1.csv", "table1.md"} | figures
+    assert names == {"report.html", "report.md", "claims.md", "table1.csv", "table1.md", "authors.csv"} | figures
     markdown = (out / "report.md").read_text()
     assert ("Pending: waits for the odometry stage" in markdown) == ("fig7" not in drawn)
     assert all(f"({figure})" in markdown for figure in figures)
@@ -322,8 +326,8 @@ def test_report_writes_every_output(built):
     rows = re.findall(r"<tr><td>.*?</td><td>(.*?)</td><td><span class=\"badge ([\w-]+)\">.*?</td>"
                       r"<td><span class=\"badge ([\w-]+)\">", summary)
     assert len(rows) == len(claims.CLAIMS)
-    assert all(("<br>" in cell) == (authors != "reproduced" or textbook != "reproduced")
-               for cell, authors, textbook in rows), rows
+    assert all(("<br>" in cell) == (authors != "reproduced" or textbook != "reproduced"
+                                    or layout.CONTRADICTED in cell) for cell, authors, textbook in rows), rows
 
 
 @pytest.mark.slow

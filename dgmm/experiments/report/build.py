@@ -14,7 +14,9 @@ from functools import cached_property
 from pathlib import Path
 
 from dgmm.data import load_mesh, load_points
+from dgmm.experiments.authors_data import COLUMNS as AUTHORS_COLUMNS
 from dgmm.experiments.report import claims, figures, layout, paper, tables
+from dgmm.experiments.report.authors import HEADLINE, AuthorsData, authors_measurements
 from dgmm.experiments.report.claims.rules import SECTION_TITLES, first_section
 from dgmm.experiments.report.document import markdown_table, to_html, to_markdown
 from dgmm.files import atomic_path
@@ -23,6 +25,7 @@ from dgmm.runtime.tables import read_csv, write_csv
 INPUTS = {
     # key: what it is (said when a section waits for it)
     "likelihood": "the fitting sweep's likelihood.csv",
+    "authors": "the authors' stored results authors.csv (rule authors_data)",
     "fig2": "the Fig 2 table fig2.csv",
     "registration": "the registration stage (config section `registration`)",
     "odometry": "the odometry stage's odometry.csv (config section `odometry`)",
@@ -95,6 +98,22 @@ class Loaded:
         return tables.likelihood_means(read_csv(self.paths["likelihood"])) if "likelihood" in self.paths else None
 
     @cached_property
+    def authors(self):
+        """The authors' stored results (None: not given)."""
+        return AuthorsData(read_csv(self.paths["authors"])) if "authors" in self.paths else None
+
+    @cached_property
+    def cells(self):
+        """Every stored value of the authors' beside ours (() without their table)."""
+        if self.authors is None:
+            return []
+        return self.authors.cells(self.measured.estimates, self.errors_of("scaled", HEADLINE))
+
+    def stored(self):
+        """The authors' data as the claims read it (None without their table)."""
+        return None if self.authors is None else authors_measurements(self.authors, self.measured)
+
+    @cached_property
     def fig2(self):
         return read_csv(self.paths["fig2"]) if "fig2" in self.paths else None
 
@@ -127,7 +146,8 @@ class Loaded:
         return {key: (load_points(self.paths[key]), None) if key in POINT_SETS else load_mesh(self.paths[key])
                 for key in figures.MESH_KEYS if key in self.paths}
 
-    def measurements(self):
+    @cached_property
+    def measured(self):
         """What the claims read: every table of ``claims.TABLES`` among the inputs."""
         return claims.Measurements(**{name: read_csv(self.paths[name]) for name in claims.TABLES
                                       if name in self.paths})
@@ -145,20 +165,28 @@ FIGURES = (
                "points (±1 std over draws). **Diamonds**: our EM bound (with the entropy). **Red lines**: all the "
                "fitted points (solid: the paper's quantity, dashed: mean log-likelihood). The y axis does not start "
                "at zero."),
-    FigureSpec("fig3", "Fig 3: mesh information (bunny res4)", ("likelihood",), claims.FIG3_INPUTS,
-               lambda data: figures.likelihood_vs_k(tables.likelihood_curves(data.means, "bunny", claims.FIG3_INPUTS),
-                                                    claims.FIG3_INPUTS, paper.FIG3_EXACT_KMEANS),
-               "Mean log-likelihood of res4's evaluation points vs K, a panel per start, band ±1 std over seeds. "
-               "Mesh inputs dashed (textbook EM) or dotted (the authors' EM), point inputs solid; stars: the "
-               f"notebook's exact k-means values. The y axis spans {figures.Y_SPAN:g} nats below the best mean: "
-               "lines leaving it are collapsed fits (453 vertices cannot hold hundreds of components)."),
-    FigureSpec("fig4", "Fig 4: decimation and sampling (full bunny)", ("likelihood",), claims.FIG4_INPUTS,
-               lambda data: figures.likelihood_vs_k(tables.likelihood_curves(data.means, "bunny", claims.FIG4_INPUTS),
-                                                    claims.FIG4_INPUTS),
-               "Mean log-likelihood of the full bunny's evaluation points vs K for fits to about 1000 primitives: "
-               "quadric and clustering decimations (mesh, dashed textbook EM, dotted authors' EM) and Poisson-disk "
-               "and random samples (points, solid); band ±1 std over seeds. The y axis spans at most "
-               f"{figures.Y_SPAN:g} nats below the best mean."),
+    *(FigureSpec(name, f"Fig {number}: {title}, mesh mixtures from {label}", ("likelihood",), inputs,
+                 lambda data, variant=variant, number=number, inputs=inputs: figures.likelihood_vs_k(
+                     tables.likelihood_curves(data.means, "bunny", inputs), inputs, variant, figures.BAND_SD[number],
+                     data.authors.curves(f"fig{number}") if data.authors else None),
+                 f"{what} vs K (log scale), a panel per start, band ±{figures.BAND_SD[number]:g} standard deviation(s) over "
+                 f"seeds, y from {figures.Y_LIMITS[0]:g} to {figures.Y_LIMITS[1]:g} nats, as the authors drew it. "
+                 f"Mesh inputs dashed (fitted with {label}), point inputs solid (textbook EM, the same algorithm); "
+                 "crosses on a dotted line: the authors' stored means of the same input (authors.csv). Collapsed "
+                 "point fits leave the axes below 2 nats, as in the authors' figure.")
+      for number, title, inputs, what in (
+          (3, "mesh information (bunny res4)", claims.FIG3_INPUTS, "Mean log-likelihood of res4's evaluation points"),
+          (4, "decimation and sampling (full bunny)", claims.FIG4_INPUTS,
+           "Mean log-likelihood of the full bunny's evaluation points for fits to about 1000 primitives (quadric and "
+           "clustering decimations, Poisson-disk and random samples)"))
+      for name, variant, label in ((f"fig{number}", "textbook", "textbook EM"),
+                                   (f"fig{number}_authors", "authors", "the authors' EM"))),
+    FigureSpec("fig5", "Fig 5: input and output representations", figures.MESH_KEYS, (),
+               lambda data: figures.fig5_representations(data.meshes, figures.pictured_mixtures(data.meshes,
+                                                                                                 data.seed)),
+               "The full bunny, its 1000-primitive decimations and samples, the dense evaluation set, and K=100 "
+               f"GMMs ({figures.N_SIGMA:g}σ ellipsoids) fitted in the report job (k-means start, 25 "
+               "iterations, seeded) to res4's vertices (points GMM) and to its triangles (mesh GMM)."),
     *(FigureSpec(name, f"Fig 6: registration (bunny), mesh mixtures from {label}", ("registration",),
                  ("/".join(tables.FIG6_MESH),),
                  lambda data, variant=variant: figures.fig6_registration(data.errors_of("scaled", variant),
@@ -174,12 +202,6 @@ FIGURES = (
                "Top-down trajectories of frame-to-frame odometry: GMM D2D with pixel primitives, with plain points, "
                "and point-to-point ICP, against the ground truth. The GMM runs' per-frame schedule is "
                "odometry.csv's `schedule` (config `odometry.schedule`; docs: the odometry user guide)."),
-    FigureSpec("fig5", "Fig 5: input and output representations", figures.MESH_KEYS, (),
-               lambda data: figures.fig5_representations(data.meshes, figures.pictured_mixtures(data.meshes,
-                                                                                                 data.seed)),
-               "The full bunny, its 1000-primitive decimations and samples, the dense evaluation set, and K=100 "
-               f"GMMs ({figures.N_SIGMA:g}σ ellipsoids) fitted in the report job (k-means start, 25 "
-               "iterations, seeded) to res4's vertices (points GMM) and to its triangles (mesh GMM)."),
 )
 
 
@@ -222,9 +244,9 @@ TABLE1_SETTINGS = {"scaled": "Trials with translations and the mixtures' covaria
                    "literal": "Trials with the authors' literal ±0.05 translations and reg_covar in model units "
                               "(bunny row: –)"}
 TABLE1_VARIANTS = {"textbook": "textbook EM", "authors": "the authors' published EM"}
-TABLE1_HEADER = ["model (mesh)", "likelihood points", "likelihood mesh", "rotation % ICP points",
-                 "rotation % ICP mesh", "translation % ICP points", "translation % ICP mesh",
-                 "rotation % ICP mesh, coarse-to-fine", "translation % ICP mesh, coarse-to-fine"]
+TABLE1_HEADER = ["model (mesh)", "likelihood points", "likelihood mesh", "translation % ICP points",
+                 "translation % ICP mesh", "rotation % ICP points", "rotation % ICP mesh",
+                 "translation % ICP mesh, coarse-to-fine", "rotation % ICP mesh, coarse-to-fine"]
 
 
 def _figure_blocks(spec, drawn, keys):
@@ -256,6 +278,7 @@ def blocks(loaded, drawn, evaluated):
     each section followed by the figures and tables its claims are about, and last the timing block."""
     keys = set(loaded.paths)
     result = [("h1", TITLE), *(("p", text) for text in layout.findings(evaluated)),
+              *(("p", text) for text in layout.stored_findings(evaluated, loaded.cells)),
               ("table", layout.SUMMARY_HEADER, layout.summary_rows(evaluated), "summary"),
               ("h2", "How the claims are graded", "grading"), ("list", layout.grading_rules())]
     by_section = {}  # the claims come in the paper's order (claims.evaluate)
@@ -319,8 +342,10 @@ def build_report(paths, drawn, out_dir, seed=0):
     _write(out_dir / "table1.md", markdown_table(["trials, EM", *TABLE1_HEADER],
                                                  [[f"{row['protocol']}, {row['variant']}", *_table1_cells(row)]
                                                   for row in every]) + "\n")
-    evaluated = claims.evaluate(loaded.measurements())
-    document, evidence = blocks(loaded, drawn, evaluated), layout.ledger(evaluated)
+    if loaded.authors is not None:
+        write_csv(out_dir / "authors.csv", loaded.authors.rows, AUTHORS_COLUMNS)
+    evaluated = claims.evaluate(loaded.measured, loaded.stored())
+    document, evidence = blocks(loaded, drawn, evaluated), layout.ledger(evaluated, loaded.cells)
     _write(out_dir / "report.md", to_markdown(document))
     _write(out_dir / "claims.md", to_markdown(evidence))
     _write(out_dir / "report.html", to_html(document + evidence, images, TITLE))

@@ -25,14 +25,16 @@ STYLE = {
 }
 LOG_LIKELIHOOD = "mean log-likelihood of the evaluation points (nats)"
 METHOD_ORDER = ("mesh-kmeans", "mesh-random", "points-kmeans", "points-random", "icp", "cpd")
-VARIANT_STYLE = {"textbook": ("--", "o"), "authors": (":", "s")}  # mesh inputs: dashed; points: solid
 PICTURE_VIEW = {"elev": 10.0, "azim": -80.0}
 LIGHT = np.array([0.3, -0.8, 0.6]) / np.linalg.norm([0.3, -0.8, 0.6])
 N_SIGMA = 1.5
 """Ellipsoids of triangles (Fig 1, as the paper: "plotted to 1.5σ") and of mixtures (Fig 5) span 1.5σ."""
 PICTURED_K = 100
-Y_SPAN = 6.0
-"""Figs 3, 4 show this many nats below the best mean; collapsed fits (e.g. vertices at large K) leave the axes."""
+Y_LIMITS = (2.0, 9.0)
+"""Figs 3 and 4's y axis, as the authors' notebooks set it (nats)."""
+BAND_SD = {3: 2.0, 4: 1.0}
+"""Figs 3 and 4's bands: ± this many standard deviations over seeds, as the authors' notebooks draw them
+(``tri_verts_graph.ipynb``: ``2*sdf``; ``format_graphs.ipynb``: ``sdf``)."""
 MESH_KEYS = ("res4", "full", "random", "clustering", "dense", "poisson", "quadric")
 """Data-stage files of the bunny the pictures read (Fig 1: res4; Fig 5: all)."""
 HEAD = (np.array([-0.065, 0.125, 0.035]), 0.022)
@@ -237,8 +239,9 @@ def _input_colours(inputs):
     return {name: matplotlib.colormaps["tab10"](index) for index, name in enumerate(inputs)}
 
 
-def likelihood_vs_k(curves, inputs, reference=None):
-    """Figs 3, 4: mean eval log-likelihood vs K per input, one panel per init, ±1 std band over seeds.
+def likelihood_vs_k(curves, inputs, variant, band_sd, stored=None):
+    """Figs 3, 4 as the authors drew them: mean eval log-likelihood vs K (log scale) per input, one panel per start,
+    a band of ±``band_sd`` standard deviations over seeds, y from 2 to 9 nats; the authors' stored means overlaid.
 
     Parameters
     ----------
@@ -246,27 +249,32 @@ def likelihood_vs_k(curves, inputs, reference=None):
         :func:`dgmm.experiments.report.tables.likelihood_curves`.
     inputs : sequence of str
         Input names in legend order (their colours).
-    reference : dict, optional
-        ``K -> value`` of the paper, marked on the k-means panel.
+    variant : str
+        The EM whose mesh fits are drawn (point inputs: textbook EM, the same algorithm).
+    band_sd : float
+        Half-width of the band in standard deviations over seeds (:data:`BAND_SD`).
+    stored : dict, optional
+        ``(input, init) -> (ks, means)`` of the authors' stored values, drawn as crosses on a thin line.
     """
-    inits = sorted({init for _, _, init in curves})
+    curves = {key: curve for key, curve in curves.items()
+              if key[1] == (variant if parse_input(key[0])[1] in SIZED else "textbook")}
+    inits = sorted({init for _, _, init in curves} | {init for _, init in stored or {}})
     colours = _input_colours(inputs)
-    values = np.concatenate([mean for _, mean, _ in curves.values()])
-    figure = new_figure(4.0 * len(inits) + 2.6, 4.2)
+    figure = new_figure(4.0 * len(inits) + 2.8, 4.2)
     axes = figure.subplots(1, len(inits), sharey=True, squeeze=False)[0]
     for ax, init in zip(axes, inits):
-        for (name, variant, curve_init), (ks, mean, std) in curves.items():
-            if curve_init != init:
-                continue
-            sized = parse_input(name)[1] in SIZED
-            line, marker = VARIANT_STYLE[variant] if sized else ("-", "o")
-            label = f"{name} ({variant} EM)" if sized else name
-            ax.plot(ks, mean, linestyle=line, marker=marker, markersize=3.5, color=colours[name], label=label)
-            ax.fill_between(ks, mean - std, mean + std, color=colours[name], alpha=0.15, linewidth=0)
-        if reference and init == "kmeans":
-            ax.plot(list(reference), list(reference.values()), "k*", markersize=9, label="paper (exact, k-means)")
+        for (name, _, curve_init), (ks, mean, std) in curves.items():
+            if curve_init == init:
+                line = "--" if parse_input(name)[1] in SIZED else "-"
+                ax.plot(ks, mean, linestyle=line, marker="o", markersize=3.5, color=colours[name], label=f"{name}")
+                ax.fill_between(ks, mean - band_sd * std, mean + band_sd * std, color=colours[name], alpha=0.15,
+                                linewidth=0)
+        for (name, stored_init), (ks, means) in (stored or {}).items():
+            if stored_init == init and name in colours:
+                ax.plot(ks, means, linestyle=":", linewidth=1.0, marker="x", markersize=6, color=colours[name],
+                        label=f"{name}, authors' stored")
         ax.set(xscale="log", title=f"{init} initialisation", xlabel="number of components K (log scale)")
-        ax.set_ylim(max(values.min(), values.max() - Y_SPAN) - 0.2, values.max() + 0.3)
+        ax.set_ylim(*Y_LIMITS)
     axes[0].set_ylabel(LOG_LIKELIHOOD)
     handles = {label: handle for ax in axes for handle, label in zip(*ax.get_legend_handles_labels())}
     figure.legend(handles.values(), handles.keys(), loc="outside right center")

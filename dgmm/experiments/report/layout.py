@@ -8,6 +8,7 @@ import re
 
 from dgmm.experiments.report import claims
 from dgmm.experiments.report.claims import grading
+from dgmm.experiments.report.authors import ITEMS as AUTHORS_ITEMS
 from dgmm.experiments.report.claims.rules import NOTEBOOK, TEXT, WORDS, first_section
 from dgmm.experiments.report.document import BADGE_MARKS
 
@@ -38,19 +39,58 @@ def _grade_text(grade):
 
 
 SUMMARY_HEADER = ["section", "claim — why, when not reproduced",
-                  *(claims.VARIANT_NAMES[v] + (" (headline)" if v == claims.HEADLINE else "")
-                    for v in claims.VARIANTS), "paper"]
+                  *("ours, " + claims.VARIANT_NAMES[v] + (" (headline)" if v == claims.HEADLINE else "")
+                    for v in claims.VARIANTS), "the authors' data", "paper's text"]
+CONTRADICTED = "The authors' own stored data does not bear it out either"
+"""What the summary says of a claim the authors' data grades not reproduced: the paper's text against the paper's
+data, not our failure to reproduce."""
+
+
+def _stored_text(claim):
+    return "–" if claim.on_stored is None else _grade_text(claim.on_stored)
+
+
+def _why(claim):
+    """The cause of a claim not reproduced, led by what the authors' data says when it does not bear it out."""
+    if claim.on_stored is not None and claim.on_stored.verdict in (grading.NOT, grading.PARTLY):
+        return "\n".join(filter(None, [f"{CONTRADICTED} ({claim.on_stored.verdict}).", claim.why]))
+    return claim.why
 
 
 def summary_rows(evaluated):
     """One row per claim: its section, its title linked to its place in its section's list with
-    the cause when not reproduced, each EM's verdict and deciding number, the paper's value (marked by source; none
-    where the paper's value is its words, which the title gives)."""
+    the cause when not reproduced, each EM's verdict and deciding number on our data, the headline EM's on the
+    authors' stored data (– where it stores nothing the rule reads), the paper's value (marked by source; none where
+    the paper's value is its words, which the title gives)."""
     return [[claim.section,
-             f"[{claim.title}](#{claim_anchor(index)})" + (f"\n{claim.why}" if claim.why else ""),
-             *(_grade_text(claim.grades[v]) for v in claims.VARIANTS),
+             f"[{claim.title}](#{claim_anchor(index)})" + (f"\n{_why(claim)}" if _why(claim) else ""),
+             *(_grade_text(claim.grades[v]) for v in claims.VARIANTS), _stored_text(claim),
              claim.paper + SOURCE_MARKS[claim.source] if claim.source != WORDS and claim.paper else ""]
             for index, claim in enumerate(evaluated)]
+
+
+def stored_findings(evaluated, cells):
+    """The opening's counts of the authors' data: how many of the paper's statements hold on it, and how many of
+    our cells reproduce their stored values (``cells``: :class:`~dgmm.experiments.report.authors.Cell`)."""
+    graded = [claim for claim in evaluated if claim.on_stored is not None]
+    verdicts = [claim.on_stored.verdict for claim in graded]
+    both = sum(claim.on_stored.verdict == grading.REPRODUCED and claim.verdict == grading.REPRODUCED
+               for claim in graded)
+    compared = [cell for cell in cells if cell.reproduced is not None]
+    by_item = {}
+    for cell in compared:
+        by_item.setdefault(cell.item, []).append(cell.reproduced)
+    items = "; ".join(f"{AUTHORS_ITEMS[item]} {sum(flags)}/{len(flags)}" for item, flags in by_item.items())
+    contradicted = [claim for claim in graded if claim.on_stored.verdict in (grading.NOT, grading.PARTLY)]
+    return [
+        f"The authors' own data (their notebooks' stored outputs, authors.csv) can grade {len(graded)} of the "
+        f"paper's statements: on it, {', '.join(f'{{{{{v}}}}} {verdicts.count(v)}' for v in VERDICT_ORDER if v in verdicts)}"
+        f". {len(contradicted)} statements are not fully borne out by the paper's own data; the summary says so "
+        f"where it says why ours are not. {both} hold on both their data and ours (headline EM).",
+        f"Our sweep reproduces {sum(cell.reproduced for cell in compared)} of the {len(compared)} stored values it "
+        f"has cells for ({items}; a cell reproduces when our mean is inside the tie band of two means with our "
+        "seeds' standard error, plus the stored value's rounding). Every cell is listed in claims.md.",
+    ] if cells or graded else []
 
 
 def _counts(evaluated, variant):
@@ -110,13 +150,43 @@ def ledger_item(claim):
                   f"Paper: {claim.paper or '–'}{source}. Ours: {evidence} Rule: {claim.rule}.")
 
 
-def ledger(evaluated):
-    """The evidence ledger (``claims.md``): every claim's numbers, in the report's order."""
+def ledger(evaluated, cells=()):
+    """The evidence ledger (``claims.md``): every claim's numbers, in the report's order, then every stored value of
+    the authors' beside ours (``cells``)."""
     return [("h1", "The claims' evidence"),
             ("p", "Our numbers behind each verdict of [the report](report.md), claim by claim, in the report's "
                   "order (rule kinds: the report's \"How the claims are graded\")."),
             ("list", [ledger_item(claim) for claim in evaluated],
-             [f"evidence-{index + 1}" for index in range(len(evaluated))])]
+             [f"evidence-{index + 1}" for index in range(len(evaluated))]),
+            *cell_tables(cells)]
+
+
+CELL_HEADER = ["cell", "theirs", "their iterations", "ours ± standard error", "ours − theirs", "band", "reproduced"]
+
+
+def _cell_row(cell):
+    if cell.ours is None:
+        return [cell.label, cell.printed, cell.n_iter or "–", "–", "–", "–", "not in our sweep"]
+    return [cell.label, cell.printed, cell.n_iter or "–", f"{cell.ours.value:.4f} ± {cell.ours.error:.4f}",
+            f"{cell.difference:+.4f}", f"±{cell.band:.4f}", "yes" if cell.reproduced else "no"]
+
+
+def cell_tables(cells):
+    """One table per item of the authors' stored values: theirs, ours, the difference against its band."""
+    if not cells:
+        return []
+    result = [("h2", "The authors' stored values beside ours", "stored-values"),
+              ("p", "Each stored value of the authors' notebooks (authors.csv: notebook and cell) against our cell of "
+                    "the same input, start and K: mesh inputs fitted by the authors' EM, point inputs by textbook EM "
+                    "(the same algorithm). The band is the tie band of two means with our seeds' standard error "
+                    "(the notebooks store no spread) plus half the stored value's last printed digit.")]
+    for item, title in AUTHORS_ITEMS.items():
+        listed = [cell for cell in cells if cell.item == item]
+        if listed:
+            units = ", ".join(dict.fromkeys(cell.unit for cell in listed))
+            result += [("h3", f"{title} ({units})", f"stored-{item}"),
+                       ("table", CELL_HEADER, [_cell_row(cell) for cell in listed])]
+    return result
 
 
 def timing_block(evaluated):

@@ -6,6 +6,8 @@ Fig 5), :mod:`~.decimation` (§IV-B, §IV-C, Fig 4), :mod:`~.convergence` (§I, 
 verdicts are in :mod:`~.grading`; what a claim holds and the EM policy in :mod:`~.rules`; what the claims read in
 :mod:`~.measurements`.
 """
+from dataclasses import replace
+
 from dgmm.experiments.report.claims import convergence, decimation, fitting, odometry, registration, table1, theory
 from dgmm.experiments.report.claims.grading import (NOT, PARTLY, PENDING, REPRODUCED, RULE_KINDS, TIMING_NOISE,
                                                     VERDICTS, Grade)
@@ -15,12 +17,27 @@ from dgmm.experiments.report.claims.rules import (FIG3_INPUTS, FIG4_INPUTS, HEAD
 
 SECTIONS = (theory, fitting, decimation, convergence, registration, table1, odometry)
 CLAIMS = tuple(claim for module in SECTIONS for claim in module.CLAIMS)
+ON_STORED = (fitting.fig3_values, fitting.exact_best_approx_second, fitting.mesh_handles_both_inits,
+             fitting.points_prefer_an_init, decimation.quadric_beats_clustering, decimation.poisson_beats_random,
+             decimation.mesh_invariant_to_init, decimation.points_prefer_kmeans, decimation.poisson_kmeans_often_best,
+             decimation.random_samples_lowest, decimation.mesh_reliable, decimation.random_points_prefer_random,
+             decimation.exact_never_prefers_random, table1.mesh_likelihood_higher, table1.likelihood_margins,
+             table1.likelihood_values)
+"""The claims whose rules read only the likelihood cells' means and their noise: the ones the authors' stored means
+can grade (:mod:`dgmm.experiments.report.authors`)."""
 
 
-def evaluate(data):
+def evaluate(data, stored=None):
     """Every claim of ``CLAIMS`` graded on ``data`` (a :class:`Measurements`), in the order of the paper's
-    sections."""
-    return in_paper_order([claim(data) for claim in CLAIMS])
+    sections; with ``stored`` (the authors' data as Measurements), each claim of ``ON_STORED`` is graded on it too
+    (``Claim.on_stored``, the headline EM's grade)."""
+    graded = []
+    for claim in CLAIMS:
+        result = claim(data)
+        if stored is not None and claim in ON_STORED:
+            result = replace(result, on_stored=claim(stored).grades[HEADLINE])
+        graded.append(result)
+    return in_paper_order(graded)
 
 
 __all__ = ["CLAIMS", "Claim", "FIG3_INPUTS", "FIG4_INPUTS", "Grade", "HEADLINE", "Measurements", "NOT", "PARTLY",

@@ -105,6 +105,9 @@ class Claim:
         Where the paper value comes from: ``TEXT``, ``NOTEBOOK`` or ``WORDS``.
     timings : str
         A timing claim's numbers of this run (they go to the report's timing block); "" for other claims.
+    on_stored : Grade or None
+        The headline EM's grade on the authors' stored data (:mod:`dgmm.experiments.report.authors`); None where
+        their data cannot grade it.
     """
 
     section: str
@@ -116,6 +119,7 @@ class Claim:
     paper: str = ""
     source: str = WORDS
     timings: str = ""
+    on_stored: Grade = None
 
     @property
     def machine_dependent(self):
