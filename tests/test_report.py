@@ -149,8 +149,8 @@ def test_summary_rows_link_each_claim_to_its_section_and_details():
     assert layout.figure_anchor("Fig 2") == "fig2" and layout.figure_anchor("") is None
     assert layout.summary_rows(evaluated) == [  # authors' EM (the headline) first; words need no paper column
         ["§III-A", "[a](#claim-1)", "{{reproduced}} 1", "{{reproduced}} 1", "–", ""],
-        ["§IV-A", "[b](#claim-2)\nThe authors' own stored data does not bear it out either (not reproduced).\n"
-                  "textbook EM: Because of c.", "{{reproduced}} 5", "{{partly}} 6", "{{not reproduced}} 0/3 won",
+        ["§IV-A", "[b](#claim-2)\nThe authors' own stored data does not bear it out (0/3 won): the paper's text "
+                  "against its own data, not a failure to reproduce it.\ntextbook EM: Because of c.", "{{reproduced}} 5", "{{partly}} 6", "{{not reproduced}} 0/3 won",
          "7ᴺ"],
         ["§I, §VII", "[d](#claim-3)\nBecause of e.", "{{not reproduced}} 3", "{{not reproduced}} 3", "–", ""]]
     assert layout.SUMMARY_HEADER[2:5] == ["ours, authors' EM (headline)", "ours, textbook EM", "the authors' data"]

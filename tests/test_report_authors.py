@@ -41,7 +41,7 @@ def test_a_claim_our_data_misses_is_graded_on_the_authors_means_with_our_noise()
             stored += [_stored("poisson1000-points", init, k, f"{random_ + 0.3:.6f}"),
                        _stored("random1000-points", init, k, f"{random_:.6f}")]
     data = claims.Measurements(likelihood=ours)
-    on_stored = authors_measurements(AuthorsData(stored), data)
+    on_stored = authors_measurements(AuthorsData(stored), data)["figures"]
     assert decimation.poisson_beats_random(data).grades["authors"].verdict == NOT
     graded = decimation.poisson_beats_random(on_stored).grades["authors"]
     assert graded.verdict == REPRODUCED and graded.ours == "4/4 won"
@@ -49,7 +49,7 @@ def test_a_claim_our_data_misses_is_graded_on_the_authors_means_with_our_noise()
     assert estimate.value == pytest.approx(7.8)  # their mean, our standard error
     assert estimate.error == pytest.approx(data.estimates[("bunny", "poisson1000-points", "textbook", "kmeans",
                                                            25)].error)
-    (claim,) = [c for c in claims.evaluate(data, on_stored) if c.title == "Poisson-disk samples fit better than "
+    (claim,) = [c for c in claims.evaluate(data, authors_measurements(AuthorsData(stored), data)) if c.title == "Poisson-disk samples fit better than "
                                                                             "random samples"]
     assert claim.on_stored.verdict == REPRODUCED and claim.verdict == NOT
 
@@ -60,3 +60,41 @@ def test_claims_the_stored_means_cannot_grade_have_no_verdict_on_them():
     graded = {claim.title for claim in evaluated if claim.on_stored is not None}
     assert len(graded) == len(claims.ON_STORED)
     assert "With ε = 10⁻¹² every fit runs all 25 iterations (no early exit)" not in graded  # reads per-seed n_iter
+
+
+def _stored_registration(item, model, method, quantity, unit, value):
+    return {"item": item, "model": model, "input": method, "init": "", "K": "", "quantity": quantity, "unit": unit,
+            "value": value, "n_iter": "", "trials": "", "notebook": "n", "cell": "1"}
+
+
+def test_registration_trials_are_ours_scaled_to_the_stored_means():
+    rng = np.random.default_rng(1)
+    trial = lambda scale: {"rot": rng.lognormal(0, 0.3, 40) * scale, "trans": rng.lognormal(0, 0.3, 40) * scale}  # noqa
+    errors = {("bunny", "res4", "mesh-kmeans"): trial(2.0), ("bunny", "res4", "icp"): trial(1.0),
+              ("lucy", "quadric1000", "mesh-kmeans"): trial(3.0), ("lucy", "quadric1000", "icp"): trial(1.0)}
+    authors = AuthorsData([_stored_registration("fig6", "bunny", "mesh-kmeans", "rotation", "deg", "0.5"),
+                           _stored_registration("fig6", "bunny", "mesh-kmeans", "translation", "m", "0.0002"),
+                           _stored_registration("table1", "lucy", "mesh", "rotation", "% of ICP", "35.0")])
+    fig6 = authors.fig6_trials(errors)[("bunny", "res4", "mesh-kmeans")]
+    assert np.mean(fig6["rot"]) == pytest.approx(0.5)
+    assert np.mean(fig6["trans"]) == pytest.approx(0.0002 / 0.24077 * 100)
+    assert np.corrcoef(fig6["rot"], errors[("bunny", "res4", "mesh-kmeans")]["rot"])[0, 1] == pytest.approx(1.0)
+    table1 = authors.table1_trials(errors)
+    lucy = table1[("lucy", "quadric1000", "mesh-kmeans")]
+    assert 100 * np.mean(lucy["rot"]) / np.mean(errors[("lucy", "quadric1000", "icp")]["rot"]) == pytest.approx(35.0)
+    assert lucy["trans"] is errors[("lucy", "quadric1000", "mesh-kmeans")]["trans"]  # not stored: ours as it is
+    data = claims.Measurements(registration=[])
+    view = authors_measurements(authors, data)["figures"]
+    assert view.errors("authors") is None and view.errors("textbook") is None  # no trials of ours to scale
+
+
+def test_every_stored_value_gets_a_cell_beside_ours():
+    authors = AuthorsData([_stored("random1000-points", "kmeans", 25, "7.500000"),
+                           _stored_registration("fig6", "bunny", "icp", "rotation", "deg", "2.0"),
+                           _stored_registration("table1", "lucy", "mesh", "rotation", "% of ICP", "35.0")])
+    errors = {("bunny", "res4", "icp"): {"rot": np.array([1.0, 3.0]), "trans": np.array([0.1, 0.2])}}
+    estimates = {("bunny", "random1000-points", "textbook", "kmeans", 25): Estimate(7.45, 0.01)}
+    cells = authors.cells(estimates, errors)
+    assert [(cell.item, cell.label, cell.reproduced) for cell in cells] == [
+        ("fig4", "random1000-points kmeans K=25", False), ("table1", "lucy mesh rotation", None),
+        ("fig6", "icp rotation", True)]

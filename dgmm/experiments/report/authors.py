@@ -9,9 +9,10 @@ Two judgements, each defined once here:
   when the difference is inside the tie band of two such means, :data:`~.claims.grading.BAND_ERRORS` × √2 standard
   errors, plus half the last printed digit of the stored value.
 - **The paper's statement on the authors' data** (:func:`authors_measurements`): the claims whose rules read only
-  the likelihood cells' means are graded again with each cell's mean replaced by the authors' value, keeping our
-  standard error as its noise. Claims that read anything the notebooks do not store (per-seed iterations,
-  registration trials, timings, odometry) have no verdict on the authors' data.
+  means are graded again on the authors' stored means with our noise: each likelihood cell's mean replaced by
+  theirs with our standard error, each registration method's trials scaled to their stored mean (Fig 6: the mean
+  error; Table 1: the % of ICP's mean). Claims that read anything the notebooks do not store (per-seed iterations,
+  medians and quartiles of trials, timings, odometry) have no verdict on the authors' data.
 """
 import math
 from dataclasses import dataclass
@@ -94,9 +95,10 @@ class AuthorsData:
         return {key: tuple(np.array(column) for column in zip(*sorted(values))) for key, values in points.items()}
 
     def likelihood_keys(self):
-        """``estimates key -> row`` of every stored likelihood: Fig 3 and Fig 4 cells, Table 1's columns (mesh cells
-        are the authors' EM's, point cells textbook EM's)."""
-        result = {}
+        """``(estimates key, row)`` of every stored likelihood: Fig 3 and Fig 4 cells, Table 1's columns (mesh cells
+        are the authors' EM's, point cells textbook EM's). The bunny's Table 1 row and Fig 3's K=100 k-means cells
+        share a key: the authors stored each from its own run."""
+        result = []
         for row in self.rows:
             if row["quantity"] != "eval_ll":
                 continue
@@ -106,14 +108,14 @@ class AuthorsData:
                 key = (row["model"], name, fitted_variant(name, HEADLINE), TABLE1_FIT["init"], TABLE1_FIT["K"])
             else:
                 key = (row["model"], row["input"], fitted_variant(row["input"], HEADLINE), row["init"], int(row["K"]))
-            result[key] = row
+            result.append((key, row))
         return result
 
     def likelihood_cells(self, estimates):
         """:class:`Cell` of every stored likelihood against ``estimates`` (``Measurements.estimates``)."""
         return [Cell(row["item"], _likelihood_label(row), float(row["value"]), row["value"], estimates.get(key),
                      "nat", row["n_iter"])
-                for key, row in self.likelihood_keys().items()]
+                for key, row in self.likelihood_keys()]
 
     def fig6_cells(self, errors):
         """:class:`Cell` of Fig 6's stored means against ours (``errors``: ``(model, mesh, method) -> {"rot", "trans"}``
@@ -154,10 +156,46 @@ class AuthorsData:
         errors (``errors`` of the authors' EM's mixtures, scaled trials)."""
         return self.likelihood_cells(estimates) + self.table1_cells(errors) + self.fig6_cells(errors)
 
-    def stored_estimates(self, estimates):
+    def fig6_trials(self, errors):
+        """``errors`` (ours) with each of Fig 6's methods scaled to its stored mean rotation and translation (None
+        without errors)."""
+        if not errors:
+            return None
+        result = {}
+        for row in self.rows:
+            key = (row["model"], "res4", row["input"])
+            if row["item"] == "fig6" and key in errors:
+                name = "rot" if row["quantity"] == "rotation" else "trans"
+                mean = float(row["value"]) * (100.0 / BUNNY_DIAGONAL if row["unit"] == "m" else 1.0)
+                result.setdefault(key, dict(errors[key]))[name] = scaled(errors[key][name], mean)
+        return result
+
+    def table1_trials(self, errors):
+        """``errors`` (ours) with Table 1's points and mesh GMM trials scaled so that their mean is the stored % of
+        our ICP's on the same trials (None without errors)."""
+        if not errors:
+            return None
+        result = {}
+        for row in self.rows:
+            if row["item"] != "table1" or row["quantity"] == "eval_ll":
+                continue
+            mesh = table1_mesh(row["model"])
+            key, reference = ((row["model"], mesh, TABLE1_METHODS[kind]) for kind in (row["input"], "reference"))
+            if key in errors and reference in errors:
+                name = "rot" if row["quantity"] == "rotation" else "trans"
+                result.setdefault(reference, errors[reference])
+                mean = float(row["value"]) / 100.0 * np.mean(errors[reference][name])
+                result.setdefault(key, dict(errors[key]))[name] = scaled(errors[key][name], mean)
+        return result
+
+    def stored_estimates(self, estimates, view):
         """``estimates`` with every cell the authors stored at their value, our standard error kept; cells they did
-        not store are dropped, and so is every textbook-EM mesh cell (their data has only their EM)."""
-        stored = self.likelihood_keys()
+        not store are dropped, and so is every textbook-EM mesh cell (their data has only their EM). Where two
+        stored values share a cell, ``view``'s item wins (``"table1"``: Table 1's run, else the figures')."""
+        pairs = self.likelihood_keys()
+        preferred = [(row["item"] == "table1") == (view == "table1") for _, row in pairs]
+        stored = dict([pair for pair, first in zip(pairs, preferred) if not first]
+                      + [pair for pair, first in zip(pairs, preferred) if first])
         return {key: Estimate(float(stored[key]["value"]), value.error) for key, value in estimates.items()
                 if key in stored}
 
@@ -175,10 +213,13 @@ def _likelihood_label(row):
 
 @dataclass(frozen=True)
 class StoredMeasurements(Measurements):
-    """Measurements whose likelihood cells are the authors' stored means (:meth:`AuthorsData.stored_estimates`);
-    every other table is absent, so a claim that needs one is pending on the authors' data."""
+    """Measurements whose likelihood cells are the authors' stored means (:meth:`AuthorsData.stored_estimates`)
+    and whose registration trials (the authors' EM's) are ours scaled to their stored means
+    (:meth:`AuthorsData.fig6_trials`, :meth:`AuthorsData.table1_trials`); every other table is absent, so a claim
+    that needs one is pending on the authors' data."""
 
     stored: dict = None
+    trials: dict = None
 
     @cached_property
     def estimates(self):
@@ -188,7 +229,29 @@ class StoredMeasurements(Measurements):
     def means(self):
         return {key: (value.value, math.nan) for key, value in self.stored.items()}
 
+    def errors(self, variant):
+        """The scaled trials for the authors' EM (theirs is the only EM their data has), else None."""
+        return self.trials if variant == HEADLINE and self.trials else None
+
+
+def scaled(trials, mean):
+    """``trials`` times the factor that makes their mean ``mean``: the authors' mean with our trials' relative
+    spread (errors are positive, so the scaled ones stay so)."""
+    return np.asarray(trials) * (mean / np.mean(trials))
+
 
 def authors_measurements(authors, data):
-    """:class:`StoredMeasurements` of the authors' data with ``data``'s (ours) standard errors."""
-    return StoredMeasurements(likelihood=data.likelihood, stored=authors.stored_estimates(data.estimates))
+    """The authors' data as the claims read it, with ``data``'s (ours) noise: ``view -> StoredMeasurements`` for
+    the views of :data:`VIEWS`."""
+    errors = data.errors(HEADLINE)
+    trials = {"figures": authors.fig6_trials(errors), "table1": authors.table1_trials(errors)}
+    return {view: StoredMeasurements(likelihood=data.likelihood, stored=authors.stored_estimates(data.estimates, view),
+                                     trials=trials[view]) for view in VIEWS}
+
+
+VIEWS = {"figures": "Figs 3 and 4's cells; Fig 6's methods on bunny res4, each scaled to the stored mean of its 250 "
+                    "trials",
+         "table1": "Table 1's likelihoods; its models' points and mesh GMM trials scaled to the stored % of our ICP's "
+                   "mean"}
+"""The two views of the authors' data: their figures and their Table 1 came from separate runs (the bunny's K=100
+k-means cells and its registration trials, 250 against 25), so one set of cells cannot hold both."""

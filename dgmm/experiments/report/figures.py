@@ -269,8 +269,9 @@ def likelihood_vs_k(curves, inputs, variant, band_sd, stored=None):
                 ax.plot(ks, mean, linestyle=line, marker="o", markersize=3.5, color=colours[name], label=f"{name}")
                 ax.fill_between(ks, mean - band_sd * std, mean + band_sd * std, color=colours[name], alpha=0.15,
                                 linewidth=0)
-        for (name, stored_init), (ks, means) in (stored or {}).items():
-            if stored_init == init and name in colours:
+        for name in inputs:
+            if (name, init) in (stored or {}):
+                ks, means = stored[name, init]
                 ax.plot(ks, means, linestyle=":", linewidth=1.0, marker="x", markersize=6, color=colours[name],
                         label=f"{name}, authors' stored")
         ax.set(xscale="log", title=f"{init} initialisation", xlabel="number of components K (log scale)")

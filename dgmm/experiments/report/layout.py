@@ -41,9 +41,9 @@ def _grade_text(grade):
 SUMMARY_HEADER = ["section", "claim — why, when not reproduced",
                   *("ours, " + claims.VARIANT_NAMES[v] + (" (headline)" if v == claims.HEADLINE else "")
                     for v in claims.VARIANTS), "the authors' data", "paper's text"]
-CONTRADICTED = "The authors' own stored data does not bear it out either"
-"""What the summary says of a claim the authors' data grades not reproduced: the paper's text against the paper's
-data, not our failure to reproduce."""
+CONTRADICTED = "The authors' own stored data"
+"""How the summary opens what the authors' data says of a claim it does not fully bear out: the paper's text against
+the paper's data, not our failure to reproduce."""
 
 
 def _stored_text(claim):
@@ -52,9 +52,15 @@ def _stored_text(claim):
 
 def _why(claim):
     """The cause of a claim not reproduced, led by what the authors' data says when it does not bear it out."""
-    if claim.on_stored is not None and claim.on_stored.verdict in (grading.NOT, grading.PARTLY):
-        return "\n".join(filter(None, [f"{CONTRADICTED} ({claim.on_stored.verdict}).", claim.why]))
-    return claim.why
+    stored = claim.on_stored
+    if stored is not None and stored.verdict == grading.NOT:
+        said = (f"{CONTRADICTED} does not bear it out ({stored.ours}): the paper's text against its own data, not a "
+                "failure to reproduce it.")
+    elif stored is not None and stored.verdict == grading.PARTLY:
+        said = f"{CONTRADICTED} bears it out only partly ({stored.ours})."
+    else:
+        return claim.why
+    return "\n".join(filter(None, [said, claim.why]))
 
 
 def summary_rows(evaluated):
