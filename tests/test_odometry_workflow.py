@@ -16,7 +16,7 @@ from PIL import Image
 from dgmm.errors import DataError
 from dgmm.odometry import first_frames, seconds_summary
 from dgmm.odometry.tum import read_sequence
-from dgmm.runtime.tables import read_csv
+from dgmm.runtime.tables import read_csv, write_csv
 from tests.test_recording import read_blueprint, read_mcap, read_rrd, xyz
 from tests.workflow import RERUN, TEST_CONFIG, TEST_CONFIG_FILE, assert_recorded_table, run_snakemake
 
@@ -24,6 +24,9 @@ RUNS = {"gmm-pixels-textbook": ("gmm-pixels", "textbook"), "gmm-points-textbook"
         "icp": ("icp", "")}
 METHODS = list(RUNS)  # job folders
 N_FRAMES = TEST_CONFIG["odometry"]["frames"]
+PROTOCOL_RUNS = {"gmm-pixels-authors-patch": "authors-patch", "gmm-pixels-authors-disparity": "authors-disparity"}
+"""tests/config.yaml's authors' protocols: gmm-pixels runs over the first authors_frames frames."""
+AUTHORS_FRAMES = TEST_CONFIG["odometry"]["authors_frames"]
 MISSING = TEST_CONFIG["odometry"]["sequences"][0]
 
 
@@ -70,28 +73,45 @@ def test_every_output_exists(stage):
 
 
 @pytest.mark.slow
-def test_table_is_the_one_recorded_before_the_sweep_s_overhead_was_cut(stage):
-    assert_recorded_table(stage / "tables" / "odometry.csv")
+def test_table_is_the_one_recorded_before_the_sweep_s_overhead_was_cut(stage, tmp_path):
+    """Our protocol's rows and the columns the table had before the protocols: the bytes recorded then."""
+    rows = read_csv(stage / "tables" / "odometry.csv")
+    columns = [column for column in rows[0] if column != "protocol"]
+    ours = [{column: row[column] for column in columns} for row in rows if row["protocol"] in ("ours", "")]
+    write_csv(tmp_path / "odometry.csv", ours, columns=columns)
+    assert_recorded_table(tmp_path / "odometry.csv")
 
 
 @pytest.mark.slow
 def test_table_has_every_run_with_finite_metrics_and_the_missing_sequence(stage):
     rows = read_csv(stage / "tables" / "odometry.csv")
     assert list(rows[0]) == ["sequence", "method", "variant", "schedule", "frames", "ate_rmse_m",
-                             "rpe_translation_m_s", "rpe_rotation_deg_s", "missing_folder"]
+                             "rpe_translation_m_s", "rpe_rotation_deg_s", "protocol", "missing_folder"]
     *rows, pending = rows
+    rows, authors = rows[:len(RUNS)], rows[len(RUNS):]
     assert [(row["method"], row["variant"]) for row in rows] == list(RUNS.values())
     assert [row["schedule"] for row in rows] == ["overlap", "overlap", ""]  # tests/config.yaml's; ICP has none
+    assert [row["protocol"] for row in rows] == ["ours", "ours", ""]
+    assert [(row["method"], row["variant"], row["schedule"], row["protocol"], int(row["frames"]))
+            for row in authors] == [("gmm-pixels", "authors", "authors", protocol, AUTHORS_FRAMES)
+                                    for protocol in PROTOCOL_RUNS.values()]
+    for row in authors:
+        assert math.isfinite(float(row["ate_rmse_m"])) and row["missing_folder"] == ""
     for row in rows:
         assert row["sequence"] == "synthetic" and int(row["frames"]) == N_FRAMES and row["missing_folder"] == ""
         assert math.isfinite(float(row["ate_rmse_m"])) and float(row["ate_rmse_m"]) >= 0
         assert row["rpe_translation_m_s"] == row["rpe_rotation_deg_s"] == ""  # 8 frames span less than 1 s
     assert pending == {"sequence": "rgbd_dataset_freiburg3_missing", "method": "", "variant": "", "schedule": "",
                        "frames": "",
-                       "ate_rmse_m": "", "rpe_translation_m_s": "", "rpe_rotation_deg_s": "",
+                       "ate_rmse_m": "", "rpe_translation_m_s": "", "rpe_rotation_deg_s": "", "protocol": "",
                        "missing_folder": MISSING}
     seconds = read_csv(stage / "tables" / "odometry_seconds.csv")
-    assert [(row["method"], row["variant"]) for row in seconds] == list(RUNS.values())
+    assert [(row["method"], row["variant"], row["protocol"]) for row in seconds] == [
+        *((method, variant, "ours" if variant else "") for method, variant in RUNS.values()),
+        *(("gmm-pixels", "authors", protocol) for protocol in PROTOCOL_RUNS.values())]
+    for run in PROTOCOL_RUNS:
+        assert len(tum_rows(stage / "odometry" / "synthetic" / run / "trajectory.txt")) == AUTHORS_FRAMES
+        assert len(read_csv(stage / "odometry" / "synthetic" / run / "seconds.csv")) == AUTHORS_FRAMES
     for row, method in zip(seconds, METHODS):
         frames = read_csv(stage / "odometry" / "synthetic" / method / "seconds.csv")
         assert len(frames) == N_FRAMES and frames[0]["registration_seconds"] == ""

@@ -202,7 +202,7 @@ def odometry_sequences():
 
 
 ODO_SEQUENCES, ODO_MISSING = odometry_sequences()
-ODO_RUNS = odometry_runs(ODO["methods"], ODO["variants"])
+ODO_RUNS = odometry_runs(ODO["methods"], ODO["variants"], ODO["protocols"])
 
 
 def odometry_outputs(name):

@@ -2,7 +2,10 @@
 # frames of every configured sequence that exists (odometry.sequences: TUM RGB-D folders and ROS 2 recordings; missing
 # ones are reported pending) and of the synthetic one (rendered once from the seed into results/odometry/synthetic/sequence/), one job per
 # (sequence, run): a run is a GMM method with an EM variant (gmm-pixels-textbook, gmm-pixels-authors; the plain-point
-# GMM runs textbook EM only, the same algorithm as the authors' on unit sizes: gmm-points-textbook) or icp.
+# GMM runs textbook EM only, the same algorithm as the authors' on unit sizes: gmm-points-textbook) or icp, under
+# protocol "ours" (odometry.schedule, odometry.pixel_size), and gmm-pixels under each of the authors' protocols in
+# odometry.protocols (gmm-pixels-authors-patch, gmm-pixels-authors-disparity: dgmm.odometry.protocols) over the first
+# min(frames, authors_frames) frames. ate.csv's `protocol` column says which protocol a row ran ("" for icp).
 # Under results/odometry/{sequence}/{run}/ ({sequence}: the folder's name, a recording's file stem, or "synthetic"):
 #   trajectory.txt   the estimated trajectory, TUM format (camera -> first camera)
 #   ate.csv          ATE RMSE and the one-second RPE against the ground truth (empty without one), and the frame count
@@ -11,6 +14,21 @@
 #   odometry.rrd     the camera path and each frame's mixture (or ICP points) on the timeline `frame`
 # and results/tables/odometry.csv (ATE, RPE), odometry_seconds.csv (mean timings), results/odometry/fig7.png.
 import re
+
+from dgmm.odometry.protocols import OURS, run_protocol
+
+
+def odometry_protocol(wildcards):
+    """The protocol of an odometry job's run ("ours", or one of the authors')."""
+    return run_protocol(wildcards.run)
+
+
+def odometry_frames(wildcards):
+    """First frames of an odometry job: odometry.frames, capped at odometry.authors_frames for the authors'
+    protocols (their per-frame EM runs to convergence: ~10x our CPU per frame)."""
+    if run_protocol(wildcards.run) == OURS:
+        return ODO["frames"]
+    return min(ODO["frames"], ODO["authors_frames"])
 
 ODO_JOB = f"{ODO_DIR}/{{sequence}}/{{run}}"
 
@@ -62,7 +80,8 @@ rule odometry_run:
     params:
         run=odometry_run_params,
         seed=config["seed"],
-        frames=ODO["frames"],
+        frames=odometry_frames,
+        protocol=odometry_protocol,
         components=ODO["components"],
         schedule=ODO["schedule"],
         warm_iter=ODO["warm_iter"],

@@ -11,6 +11,7 @@ from threadpoolctl import threadpool_limits
 from dgmm.experiments.sweep import job_seed
 from dgmm.odometry import first_frames, frame_seconds, open_sequence, run_odometry
 from dgmm.odometry.metrics import drift_metrics
+from dgmm.odometry.protocols import PROTOCOLS
 from dgmm.odometry.tum import write_trajectory
 from dgmm.recording import OdometryRecorder
 from dgmm.runtime.tables import write_csv
@@ -25,10 +26,12 @@ camera, intrinsics = sequence.camera(p.run["intrinsics"])
 frames, groundtruth = first_frames(sequence, p.frames, require_groundtruth=False)
 seed = job_seed(p.seed, f"odometry/{w.sequence}/{w.run}", 0)
 options = dict(intrinsics=intrinsics, n_components=p.components, schedule=p.schedule, warm_iter=p.warm_iter or None,
-               variant=variant, size=p.pixel_size, n_icp_points=p.icp_points, seed=seed)
+               variant=variant, size=p.pixel_size, protocol=p.protocol, n_icp_points=p.icp_points, seed=seed)
+settings = PROTOCOLS[p.protocol]  # an authors' protocol's schedule and pixel size replace the configured ones
+schedule, size = (p.schedule, p.pixel_size) if settings is None else (settings.schedule, settings.size)
 params = dict(sequence=w.sequence, folder=str(smk.input.sequence), method=method, variant=variant,
-              intrinsics=camera, frames=len(frames), n_components=p.components, schedule=p.schedule,
-              warm_iter=p.warm_iter, size=p.pixel_size, n_icp_points=p.icp_points, seed=seed, root_seed=p.seed)
+              intrinsics=camera, frames=len(frames), n_components=p.components, protocol=p.protocol, schedule=schedule,
+              warm_iter=p.warm_iter, size=size, n_icp_points=p.icp_points, seed=seed, root_seed=p.seed)
 
 with threadpool_limits(smk.threads), OdometryRecorder(out.mcap, out.rrd, params=params, groundtruth=groundtruth,
                                                       intrinsics=intrinsics,
@@ -39,7 +42,9 @@ metrics = drift_metrics(result.trajectory, sequence.groundtruth)  # all None wit
 write_trajectory(out.trajectory, result.trajectory, header=f"dgmm {w.run} odometry of {w.sequence}, seed {seed}")
 job = dict(sequence=w.sequence, method=method, variant=variant if method != "icp" else "")
 metrics = {key: "" if value is None else value for key, value in metrics.items()}
-write_csv(out.ate, [{**job, "schedule": p.schedule if method != "icp" else "", "frames": len(frames), **metrics}])
-write_csv(out.seconds, [{**job, **row} for row in frame_seconds(result)])
+mixture = method != "icp"
+write_csv(out.ate, [{**job, "schedule": schedule if mixture else "", "frames": len(frames), **metrics,
+                     "protocol": p.protocol if mixture else ""}])
+write_csv(out.seconds, [{**job, "protocol": p.protocol if mixture else "", **row} for row in frame_seconds(result)])
 print(f"{w.sequence}/{w.run}: {len(frames)} frames, {metrics}, {result.cpu_seconds.mean():.3f} CPU s per frame",
       file=sys.stderr)

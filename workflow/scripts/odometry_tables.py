@@ -19,6 +19,6 @@ write_csv(smk.output.ate, [{**row, "missing_folder": ""} for row in rows] + pend
 summaries = []
 for path in smk.input.seconds:
     frames = read_csv(path)
-    job = {key: frames[0][key] for key in ("sequence", "method", "variant")}
+    job = {key: frames[0].get(key, "") for key in ("sequence", "method", "variant", "protocol")}
     summaries.append({**job, **seconds_summary(frames)})
 write_csv(smk.output.seconds, summaries)
