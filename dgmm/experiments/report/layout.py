@@ -82,19 +82,16 @@ def stored_findings(evaluated, cells):
     verdicts = [claim.on_stored.verdict for claim in graded]
     both = sum(claim.on_stored.verdict == grading.REPRODUCED and claim.verdict == grading.REPRODUCED
                for claim in graded)
-    compared = [cell for cell in cells if cell.reproduced is not None]
-    by_item = {}
-    for cell in compared:
-        by_item.setdefault(cell.item, []).append(cell.reproduced)
-    items = "; ".join(f"{AUTHORS_ITEMS[item]} {sum(flags)}/{len(flags)}" for item, flags in by_item.items())
+    counts = reproduced_by_figure(cells)
+    items = "; ".join(f"{figure} {done}/{compared}" for figure, (done, compared) in counts.items())
     contradicted = [claim for claim in graded if claim.on_stored.verdict in (grading.NOT, grading.PARTLY)]
     return [
         f"The authors' own data (their notebooks' stored outputs, authors.csv) can grade {len(graded)} of the "
         f"paper's statements: on it, {', '.join(f'{{{{{v}}}}} {verdicts.count(v)}' for v in VERDICT_ORDER if v in verdicts)}"
         f". {len(contradicted)} statements are not fully borne out by the paper's own data; the summary says so "
         f"where it says why ours are not. {both} hold on both their data and ours (headline EM).",
-        f"Our sweep reproduces {sum(cell.reproduced for cell in compared)} of the {len(compared)} stored values it "
-        f"has cells for ({items}; a cell reproduces when our mean is inside the tie band of two means with our "
+        f"Our sweep reproduces {sum(done for done, _ in counts.values())} of the "
+        f"{sum(compared for _, compared in counts.values())} stored values it has cells for ({items}; a cell reproduces when our mean is inside the tie band of two means with our "
         "seeds' standard error, plus the stored value's rounding). Every cell is listed in claims.md.",
     ] if cells or graded else []
 
@@ -147,13 +144,30 @@ def claim_item(claim):
     return f"{marks} {claim.title}{timing}"
 
 
-def ledger_item(claim):
-    """A claim in the evidence ledger: its verdicts, the paper's value and source, our numbers and the rule."""
+def ledger_item(claim, reproduced=None):
+    """A claim in the evidence ledger: its verdicts, the paper's value and source, our numbers and the rule; where
+    the authors' data grades it, that verdict and how many of our cells of its figure reproduce their stored values
+    (``reproduced``: ``figure -> (reproduced, compared)``)."""
     grades = "; ".join(f"{claims.VARIANT_NAMES[v]} {_grade_text(claim.grades[v])}" for v in claims.VARIANTS)
     evidence = claim.evidence or "its numbers are in the report's timing block."
     source = "" if claim.source != NOTEBOOK else " (authors' notebooks)"
+    stored = ""
+    if claim.on_stored is not None:
+        count = (reproduced or {}).get(claim.figure)
+        cells = f"; our {claim.figure} cells reproduce {count[0]} of their {count[1]} stored values" if count else ""
+        stored = f" On the authors' stored data (their means, our noise): {_grade_text(claim.on_stored)}{cells}."
     return re.sub(r"\.\.(?= |$)", ".", f"**{claim.title}** ({claim.section}) — {grades}. "
-                  f"Paper: {claim.paper or '–'}{source}. Ours: {evidence} Rule: {claim.rule}.")
+                  f"Paper: {claim.paper or '–'}{source}. Ours: {evidence}{stored} Rule: {claim.rule}.")
+
+
+def reproduced_by_figure(cells):
+    """``figure name -> (cells reproduced, cells compared)`` of :class:`~dgmm.experiments.report.authors.Cell`."""
+    result = {}
+    for cell in cells:
+        if cell.reproduced is not None:
+            done, compared = result.get(AUTHORS_ITEMS[cell.item], (0, 0))
+            result[AUTHORS_ITEMS[cell.item]] = (done + cell.reproduced, compared + 1)
+    return result
 
 
 def ledger(evaluated, cells=()):
@@ -162,7 +176,7 @@ def ledger(evaluated, cells=()):
     return [("h1", "The claims' evidence"),
             ("p", "Our numbers behind each verdict of [the report](report.md), claim by claim, in the report's "
                   "order (rule kinds: the report's \"How the claims are graded\")."),
-            ("list", [ledger_item(claim) for claim in evaluated],
+            ("list", [ledger_item(claim, reproduced_by_figure(cells)) for claim in evaluated],
              [f"evidence-{index + 1}" for index in range(len(evaluated))]),
             *cell_tables(cells)]
 
