@@ -1,5 +1,10 @@
-"""What the claims read: the sweep's and the checks' tables, each None while its stage is not configured."""
-from dataclasses import dataclass
+"""What the claims read: the sweep's and the checks' tables, each None while its stage is not configured.
+
+likelihood.csv holds fits of two protocols apart by their ``max_iter`` column: the paper's text's 25 iterations
+(every experiment) and the authors' stored 100 (Fig 4 again, config experiment fig4_100). A :class:`Measurements`
+shows one: the text's by default, another from :meth:`Measurements.at_iterations`.
+"""
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 
 from collections import defaultdict
@@ -26,7 +31,12 @@ TABLES = {
 
 @dataclass(frozen=True)
 class Measurements:
-    """Rows of every table of ``TABLES`` (None: not configured), with the summaries several claims share."""
+    """Rows of every table of ``TABLES`` (None: not configured), with the summaries several claims share.
+
+    ``likelihood`` holds the rows of likelihood.csv's fits capped at ``max_iter`` iterations (the text's 25 unless
+    :meth:`at_iterations` says otherwise); ``all_fits`` every row, whatever its cap (set from ``likelihood`` when not
+    given).
+    """
 
     likelihood: list = None
     fig2: list = None
@@ -40,11 +50,25 @@ class Measurements:
     optimisers_seconds: list = None
     timing_seconds: list = None
     identities: list = None
+    max_iter: int = tables.TEXT_MAX_ITER
+    all_fits: list = field(default=None, repr=False)
+
+    def __post_init__(self):
+        if self.all_fits is None:
+            object.__setattr__(self, "all_fits", self.likelihood)
+        if self.all_fits is not None:
+            object.__setattr__(self, "likelihood", tables.likelihood_rows(self.all_fits, self.max_iter))
+
+    def at_iterations(self, max_iter):
+        """The same tables with ``likelihood`` (and ``means``, ``estimates``) the fits capped at ``max_iter``
+        iterations: ``at_iterations(100)`` shows Fig 4 as the authors' stored data ran it (config experiment
+        fig4_100; the other experiments have no such fits)."""
+        return replace(self, max_iter=max_iter, likelihood=None)
 
     @cached_property
     def means(self):
         """:func:`dgmm.experiments.report.tables.likelihood_means` of ``likelihood`` ({} when it is missing)."""
-        return tables.likelihood_means(self.likelihood) if self.likelihood else {}
+        return tables.likelihood_means(self.likelihood, self.max_iter) if self.likelihood else {}
 
     @cached_property
     def estimates(self):
