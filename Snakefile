@@ -7,7 +7,7 @@ from snakemake.utils import min_version
 from dgmm.runtime.job_server import JobServer, script_imports
 from dgmm.runtime.snakemake_sigterm import install as install_sigterm_handler
 
-min_version("8.0")
+min_version("9.27.1")
 install_sigterm_handler()  # `kill` stops the sweep gracefully at any moment (dgmm.runtime.snakemake_sigterm)
 
 

@@ -1,9 +1,16 @@
 """Snakemake's SIGTERM handler under dgmm.runtime.snakemake_sigterm: a kill that lands while the main thread holds the
 scheduler's lock stops the run instead of hanging it. Real signals, in a child process (a hang cannot take the test
 run with it)."""
+import hashlib
+import inspect
 import subprocess
 import sys
 import textwrap
+from importlib.metadata import version
+
+from snakemake.scheduling.job_scheduler import JobScheduler
+
+from dgmm.runtime.snakemake_sigterm import WRITTEN_AGAINST
 
 # A scheduler with only what exit_gracefully touches; SIGTERM delivered to the main thread inside `with _lock`, where
 # Snakemake's main loop records finished jobs.
@@ -31,3 +38,11 @@ def test_sigterm_under_the_scheduler_lock_stops_the_run():
     # Without the workaround the child blocks on its own lock and the run times out.
     result = subprocess.run([sys.executable, "-c", _CHILD], capture_output=True, text=True, timeout=30)
     assert result.returncode == 0 and result.stdout.strip() == "stopped", result.stderr[-2000:]
+
+
+def test_the_patched_method_is_the_one_the_workaround_was_written_against():
+    """A Snakemake whose exit_gracefully changed (or has none) fails here: look at the release again."""
+    handler = getattr(JobScheduler.exit_gracefully, "wrapped", JobScheduler.exit_gracefully)
+    source = hashlib.sha256(inspect.getsource(handler).encode()).hexdigest()
+    assert source == WRITTEN_AGAINST[1], f"snakemake {version('snakemake')}: exit_gracefully changed"
+    assert version("snakemake").rsplit(".", 1)[0] == WRITTEN_AGAINST[0].rsplit(".", 1)[0]

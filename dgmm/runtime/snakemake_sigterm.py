@@ -10,10 +10,15 @@ thread, which takes the lock once the main thread lets go of it: the same gracef
 """
 from __future__ import annotations
 
-import importlib
 import threading
 
-_SCHEDULER_MODULES = ("snakemake.scheduling.job_scheduler", "snakemake.scheduler")  # Snakemake 9, 8
+from snakemake.scheduling.job_scheduler import JobScheduler
+
+WRITTEN_AGAINST = ("9.27.1", "71dc8bb2df123d88a1b57e12b570ed27028d3465578c22207ad506cc3085ce0d")
+"""The Snakemake release this workaround was written and tested against, and the sha256 of the source of its
+``JobScheduler.exit_gracefully`` (``inspect.getsource``). pyproject.toml pins Snakemake to that release's minor
+version; tests/test_snakemake_sigterm.py fails when the method changes or disappears, so that a new release is
+looked at again (and the workaround dropped if the release no longer deadlocks)."""
 
 
 def off_main_thread(handler):
@@ -26,14 +31,6 @@ def off_main_thread(handler):
 
 
 def install():
-    """Replace ``JobScheduler.exit_gracefully`` by :func:`off_main_thread` of it, once per process; nothing if this
-    Snakemake has no such handler."""
-    for name in _SCHEDULER_MODULES:
-        try:
-            scheduler = importlib.import_module(name).JobScheduler
-        except (ImportError, AttributeError):
-            continue
-        handler = getattr(scheduler, "exit_gracefully", None)
-        if handler is not None and not hasattr(handler, "wrapped"):
-            scheduler.exit_gracefully = off_main_thread(handler)
-        return
+    """Replace ``JobScheduler.exit_gracefully`` by :func:`off_main_thread` of it, once per process."""
+    if not hasattr(JobScheduler.exit_gracefully, "wrapped"):
+        JobScheduler.exit_gracefully = off_main_thread(JobScheduler.exit_gracefully)
