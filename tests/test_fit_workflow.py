@@ -10,9 +10,12 @@ import numpy as np
 import pytest
 
 from dgmm.experiments.shared_responsibility import PER_POINT_MEASURE
-from dgmm.runtime.tables import read_csv
+from dgmm.runtime.tables import read_csv, write_csv
 from tests.test_recording import read_blueprint, read_mcap, read_rrd
 from tests.workflow import RERUN, TEST_CONFIG, assert_recorded_table, run_snakemake, snakemake_command
+
+FIT = TEST_CONFIG["fit"]
+CAPPED = FIT["experiments"]["fig4_100"]  # Fig 4's inputs at the authors' 100 iterations; every other fit at 25
 
 pytestmark = pytest.mark.slow
 
@@ -27,16 +30,19 @@ def sweep(tmp_path_factory):
 
 
 def mean_eval(rows):
-    """Mean eval_ll over seeds per (input, K, init, variant)."""
+    """Mean eval_ll over seeds per (input, K, init, variant) of the fits at fit.max_iter."""
     groups = defaultdict(list)
     for row in rows:
+        if int(row["max_iter"]) != FIT["max_iter"]:
+            continue
         groups[row["input"], int(row["K"]), row["init"], row["variant"]].append(float(row["eval_ll"]))
     return {key: np.mean(values) for key, values in groups.items()}
 
 
 def test_likelihoods_reproduce_the_paper_on_bunny_res4(sweep):
     rows = read_csv(sweep / "tables" / "likelihood.csv")
-    assert list(rows[0]) == ["model", "input", "K", "init", "variant", "seed", "eval_ll", "bound", "n_iter"]
+    assert list(rows[0]) == ["model", "input", "K", "init", "variant", "seed", "eval_ll", "bound", "n_iter",
+                             "max_iter"]
     ll = mean_eval(rows)
     # Paper Fig 3: exact triangles, K=100, k-means: about 8.2 nats per evaluation point.
     assert ll["res4-exact", 100, "kmeans", "textbook"] == pytest.approx(8.2, abs=0.3)
@@ -51,17 +57,43 @@ def test_likelihoods_reproduce_the_paper_on_bunny_res4(sweep):
     assert {v for (i, *_, v) in ll if i == "res4-exact"} == {"textbook", "authors"}
 
 
-def test_likelihood_table_bytes_are_the_recorded_ones(sweep):
-    assert_recorded_table(sweep / "tables" / "likelihood.csv")
+def test_likelihood_table_bytes_are_the_recorded_ones(sweep, tmp_path):
+    """The fits at fit.max_iter, without the max_iter column, are the table recorded before the column and the
+    fig4_100 experiment were added: the same bytes."""
+    rows = [row for row in read_csv(sweep / "tables" / "likelihood.csv") if row["max_iter"] == str(FIT["max_iter"])]
+    write_csv(tmp_path / "likelihood.csv", [{k: v for k, v in row.items() if k != "max_iter"} for row in rows])
+    assert_recorded_table(tmp_path / "likelihood.csv")
+
+
+def test_capped_experiment_runs_its_own_jobs_to_its_cap(sweep):
+    """fig4_100's fits are rows of max_iter 100, from jobs of their own (.../k{K}-{init}-i100/), in fit_seconds.csv
+    too; point fits run all 100 iterations (tol 1e-12 is never reached on points)."""
+    rows = read_csv(sweep / "tables" / "likelihood.csv")
+    capped = [row for row in rows if row["max_iter"] == "100"]
+    assert {(row["input"], int(row["K"]), row["init"]) for row in capped} == {
+        (name, k, init) for name in CAPPED["inputs"] for k in CAPPED["components"] for init in CAPPED["inits"]}
+    assert {row["max_iter"] for row in rows} == {str(FIT["max_iter"]), "100"}
+    assert len(capped) == FIT["seeds"] * len(CAPPED["components"]) * len(CAPPED["inits"]) * 3  # quadric: 2 EMs
+    assert all(int(row["n_iter"]) == 100 for row in capped if row["input"].endswith("-points"))
+    assert max(int(row["n_iter"]) for row in capped) > FIT["max_iter"]
+    for row in capped:
+        job = sweep / "fits" / row["model"] / row["input"] / row["variant"] / f"k{row['K']}-{row['init']}-i100"
+        assert read_csv(job / "scores.csv")[int(row["seed"])]["n_iter"] == row["n_iter"]
+    seconds = read_csv(sweep / "tables" / "fit_seconds.csv")
+    assert [(r["input"], r["variant"], r["K"], r["init"], r["seed"], r["max_iter"]) for r in seconds] == \
+        [(r["input"], r["variant"], r["K"], r["init"], r["seed"], r["max_iter"]) for r in rows]
 
 
 def test_every_recording_reads_back_and_matches_the_table(sweep):
     rows = read_csv(sweep / "tables" / "likelihood.csv")
     jobs = defaultdict(dict)
     for row in rows:
-        job = sweep / "fits" / row["model"] / row["input"] / row["variant"] / f"k{row['K']}-{row['init']}"
+        cap = "" if int(row["max_iter"]) == FIT["max_iter"] else f"-i{row['max_iter']}"
+        job = sweep / "fits" / row["model"] / row["input"] / row["variant"] / f"k{row['K']}-{row['init']}{cap}"
         jobs[job][int(row["seed"])] = row
-    assert len(jobs) == 12  # (exact, approx) x 2 variants x 2 K + vertices x 2 K + random exact x 2 variants
+    # (exact, approx) x 2 variants x 2 K + vertices x 2 K + random exact x 2 variants; fig4_100: quadric x 2 variants
+    # and random points, from both starts
+    assert len(jobs) == 12 + 6
     for job, seeds in jobs.items():
         messages = read_mcap(job / "fit.mcap")
         iterations = [m for topic, _, m, _ in messages if topic == "/fit/iteration"]
@@ -111,7 +143,7 @@ def test_interrupted_sweep_resumes_without_redoing_jobs(sweep, tmp_path):
         raise AssertionError("Snakemake did not stop within 120 s of SIGTERM (see dgmm.runtime.snakemake_sigterm)") \
             from None
     done = {path: path.stat().st_mtime_ns for path in fits.rglob("scores.csv")}
-    assert 3 <= len(done) < 12, "the sweep should have been interrupted part-way"
+    assert 3 <= len(done) < 18, "the sweep should have been interrupted part-way"
     assert not list(tmp_path.rglob("*.part")), "an interrupted job left a partial file"
 
     rerun = run_snakemake(tmp_path, "fits")

@@ -28,7 +28,9 @@ REPRESENTATIONS = {
     "points": lambda vertices, faces: Primitives.from_points(vertices),
 }
 SIZED = ("exact", "approx")  # representations whose primitives have sizes, where the EM variants differ
-COLUMNS = ("model", "input", "K", "init", "variant", "seed", "eval_ll", "bound", "n_iter")
+COLUMNS = ("model", "input", "K", "init", "variant", "seed", "eval_ll", "bound", "n_iter", "max_iter")
+"""likelihood.csv's columns: a fit job's scores.csv has all but ``max_iter``, its iteration cap, which the table job
+appends (fit.max_iter, or the experiment's own: the same fit capped at 25 and at 100 is two rows)."""
 
 
 def parse_input(name):

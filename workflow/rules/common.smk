@@ -76,21 +76,30 @@ def data_targets():
 
 
 def fit_jobs():
-    """(model, input, variant, K, init) of every configured fit, each once."""
+    """(model, input, variant, K, init, max_iter) of every configured fit, each once; max_iter is the experiment's
+    own when it sets one, else fit.max_iter."""
     jobs = set()
     for experiment in FIT["experiments"].values():
+        max_iter = FIT["max_iter"] if experiment["max_iter"] is None else experiment["max_iter"]
         for model in experiment["models"]:
             for input_name in experiment["inputs"]:
                 for variant in variants_for(input_name, FIT["variants"]):
                     for k in experiment["components"]:
                         for init in experiment["inits"]:
-                            jobs.add((model, input_name, variant, k, init))
+                            jobs.add((model, input_name, variant, k, init, max_iter))
     return sorted(jobs)
+
+
+def fit_job_dir(model, input_name, variant, k, init, max_iter):
+    """Folder of a fit job: fits/{model}/{input}/{variant}/k{K}-{init}, with -i{max_iter} appended when the job's
+    iteration cap is not fit.max_iter (rule fit_capped)."""
+    cap = "" if max_iter == FIT["max_iter"] else f"-i{max_iter}"
+    return f"{RESULTS}/fits/{model}/{input_name}/{variant}/k{k}-{init}{cap}"
 
 
 def fit_outputs(name):
     """File ``name`` of every configured fit job."""
-    return [f"{RESULTS}/fits/{m}/{i}/{v}/k{k}-{n}/{name}" for m, i, v, k, n in fit_jobs()]
+    return [f"{fit_job_dir(*job)}/{name}" for job in fit_jobs()]
 
 
 def fit_input(wildcards):

@@ -1,6 +1,7 @@
 # Likelihood tables (Figs 2, 3, 4, Table 1) under results/tables/:
-#   likelihood.csv    every fit's seeds: model, input, K, init, variant, seed, eval_ll, bound, n_iter
-#   fit_seconds.csv   the same keys with each fit's wall time
+#   likelihood.csv    every fit's seeds: model, input, K, init, variant, seed, eval_ll, bound, n_iter, max_iter (the
+#                     job's iteration cap: fit.max_iter, or its experiment's own, e.g. Fig 4 at 100)
+#   fit_seconds.csv   the same keys with each fit's wall time, then max_iter
 #   fig2.csv          Fig 2: likelihood expressions of one K=50 fit to dense samples of bunny res4
 FIG2 = config["fig2"]
 
@@ -21,8 +22,10 @@ rule likelihood_table:
         mem_mb=500,
         runtime=5,
         cpus_per_task=1,
+    params:
+        max_iter=[job[-1] for job in fit_jobs()],  # of each input file, in fit_outputs' order
     script:
-        "../scripts/concat_tables.py"
+        "../scripts/likelihood_table.py"
 
 
 rule fig2:
