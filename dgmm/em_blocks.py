@@ -26,7 +26,9 @@ DEFAULT_MEMORY_LIMIT = 128 * 2**20
 CACHE_BLOCK_BYTES = 8 * 2**20
 """Bytes of one streamed block: large enough that two threads gain nearly 2x over one (every block costs a few GIL
 and futex hand-offs between the threads), small enough to stream (measured: docs/studies/odometry_constants.md)."""
-_ROW_FLOATS = 24  # float64 per row beside the responsibilities: E-step features, weighted moments, row sums
+ROW_FLOATS = 24
+"""float64 per row beside the responsibilities in 3-D: E-step features (11), weighted moments (10), row sums; in
+dimension d, 2 (d(d+1)/2 + d + 2) + 2."""
 
 _controller = None
 
@@ -40,10 +42,11 @@ def _blas_controller():
     return _controller
 
 
-def block_rows(n_rows, n_components, memory_limit):
+def block_rows(n_rows, n_components, memory_limit, row_floats=ROW_FLOATS):
     """Rows per block: all ``n_rows`` if they fit in ``memory_limit`` bytes, else as many as
-    ``min(memory_limit, CACHE_BLOCK_BYTES)`` bytes hold (at least 1)."""
-    row_bytes = 8 * (n_components + _ROW_FLOATS)
+    ``min(memory_limit, CACHE_BLOCK_BYTES)`` bytes hold (at least 1); a row holds ``n_components + row_floats``
+    float64."""
+    row_bytes = 8 * (n_components + row_floats)
     if n_rows * row_bytes <= memory_limit:
         return n_rows
     return int(max(1, min(memory_limit, CACHE_BLOCK_BYTES) // row_bytes))
@@ -71,10 +74,12 @@ class BlockPass:
         Bytes of responsibilities that may be held at once; see :func:`block_rows`.
     n_jobs : int or None
         Threads, as scikit-learn's ``n_jobs``.
+    row_floats : int, default=ROW_FLOATS
+        float64 per row beside the responsibilities (:data:`ROW_FLOATS`).
     """
 
-    def __init__(self, n_rows, n_components, memory_limit, n_jobs):
-        rows = block_rows(n_rows, n_components, memory_limit)
+    def __init__(self, n_rows, n_components, memory_limit, n_jobs, row_floats=ROW_FLOATS):
+        rows = block_rows(n_rows, n_components, memory_limit, row_floats)
         self.blocks = [slice(start, min(start + rows, n_rows)) for start in range(0, n_rows, rows)]
         self._shape = (n_components, min(rows, n_rows))
         self._threads = min(n_threads(n_jobs), len(self.blocks))

@@ -1,4 +1,9 @@
-"""One exception family for dgmm: every message names the input and the problem in one line."""
+"""One exception family for dgmm: every message names the input and the problem in one line.
+
+Errors that scikit-learn's estimator contract names also derive from the type it expects (``ValueError``,
+``TypeError``; ``dgmm.mixture.NotFittedError`` is scikit-learn's ``NotFittedError``, defined beside the estimator
+so that this module loads without scikit-learn), so code written for scikit-learn catches them.
+"""
 
 
 class DgmmError(Exception):
@@ -7,6 +12,10 @@ class DgmmError(Exception):
 
 class InputError(DgmmError, ValueError):
     """Bad array, mesh or parameter given to the library (shape, NaN, empty, degenerate, out of range)."""
+
+
+class InputTypeError(InputError, TypeError):
+    """An input of a type the library does not take (a sparse matrix, where scikit-learn raises TypeError)."""
 
 
 class DataError(DgmmError):

@@ -3,7 +3,8 @@
 One EM serves every primitive kind (paper §III and eqs. 11–13): a primitive ``p`` with size ``alpha_p``,
 mean ``mu_p`` and covariance ``Sigma_p`` enters only through ``alpha_p``, ``mu_p`` and its second moment
 ``E[x xᵀ] = mu_p mu_pᵀ + Sigma_p``. The E- and M-step are the point formulas with ``x xᵀ`` replaced by that
-second moment, so both become one GEMM each over a (n_prims, 11) table of moment features:
+second moment, so both become one GEMM each over a (n_prims, d(d+1)/2 + d + 2) table of moment features (11
+columns in 3-D):
 
 * E-step: ``log rho_ip = log lambda_i + log N(mu_p; mu_i, Sigma_i) − ½ tr(Sigma_i⁻¹ Sigma_p)``
   (= ``log lambda_i + E_{x~p}[log N(x; mu_i, Sigma_i)]``), ``eta_ip = softmax_i(log rho_ip)``.
@@ -11,13 +12,18 @@ second moment, so both become one GEMM each over a (n_prims, 11) table of moment
   ``Sigma_i = Σ_p w_ip E_p[x xᵀ] / W_i − mu_i mu_iᵀ + reg_covar I`` (eqs. 12, 13).
 * Bound: ``Σ_p alpha_p logsumexp_i(log rho_ip) / Σ_p alpha_p`` (eq. 11); the mean log-likelihood for points.
 
-The M-step needs of the (n_components, n_prims) responsibilities only ``resp · moments`` (n_components, 10), so
-each iteration streams over blocks of primitives (``dgmm.em_blocks``): memory is O(n_prims × 11 + block ×
+The M-step needs of the (n_components, n_prims) responsibilities only ``resp · moments`` (n_components, 10 in 3-D),
+so each iteration streams over blocks of primitives (``dgmm.em_blocks``): memory is O(n_prims × 11 + block ×
 n_components), and blocks may run on several threads without changing a bit of the result.
+
+Any dimension ``d >= 1`` (the paper's §V-A update equations do not depend on it): the table's layout is
+:class:`_Layout`, the upper triangle diagonal first, so that the 3-D table is the paper sweep's, column for column.
+A screened fit runs a compiled kernel in 3-D (:mod:`dgmm.compiled.e_step`) and numpy products in other dimensions.
 
 Read top to bottom: checks, moment features, E-step, M-step, initialisation, estimator (the EM variants are in
 :mod:`dgmm.variants`).
-Conventions follow ``sklearn.mixture.GaussianMixture`` (full covariances): ``precisions_cholesky_`` is upper
+Conventions follow ``sklearn.mixture.GaussianMixture`` (full covariances), and so does the estimator's contract
+(input validation, ``n_features_in_``, ``NotFittedError``): ``precisions_cholesky_`` is upper
 triangular ``U`` with precision ``U Uᵀ``; ``reg_covar`` on the diagonal, absolute, in the data's squared units;
 ``10 eps`` on component masses.
 
@@ -30,22 +36,23 @@ data-unit precision so that ``log rho`` is the data-unit one. A fit either retur
 """
 from __future__ import annotations
 
+import functools
 import numbers
+from dataclasses import dataclass
 
 import numpy as np
-from sklearn.base import BaseEstimator
+from sklearn.base import BaseEstimator, DensityMixin
 from sklearn.cluster import KMeans
+from sklearn.exceptions import NotFittedError as _SklearnNotFittedError
+from sklearn.utils.validation import check_is_fitted, validate_data
 
 from dgmm.em_blocks import DEFAULT_MEMORY_LIMIT, BlockPass
-from dgmm.errors import FitError, InputError
+from dgmm.errors import FitError, InputError, InputTypeError
 from dgmm.primitives import Primitives, as_primitives
 from dgmm.variants import INITS, VARIANTS
 
 _LOG_2PI = np.log(2.0 * np.pi)
 _EPS = 10.0 * np.finfo(np.float64).eps
-# Upper-triangle entries of a symmetric 3×3 matrix, in the order the feature table uses.
-_ROWS = np.array([0, 1, 2, 0, 0, 1])
-_COLS = np.array([0, 1, 2, 1, 2, 2])
 # Bytes of log rho per block when scoring: a block stays in the CPU cache through the normalisation's passes (2x
 # faster than 64k-row blocks at K = 100-400 on 50k points); rows are scored independently, so blocks change no bit
 # (with the padding below).
@@ -54,7 +61,7 @@ _SCORE_BLOCK_BYTES = 1 << 20
 # of a product with other kernels, which round differently on some CPUs (OpenBLAS's Haswell kernels on an AMD EPYC),
 # so a primitive's score would depend on where its block ends; in full tiles every row is computed alike.
 _SCORE_ROW_TILE = 8
-_TABLE_CHUNK = 1 << 16  # rows per block when building a moment table, to bound its (rows, 3, 3) temporaries
+_TABLE_CHUNK = 1 << 16  # rows per block when building a 3-D moment table, to bound its (rows, 3, 3) temporaries
 _KMEANS_SAMPLE = 1 << 17  # k-means initialisation runs on at most this many primitives (a random subsample)
 # Floor for log rho − max before exp. exp(−300) ≈ 5e−131 vanishes beside the row's largest term (1) exactly as
 # 0 would, but keeps exp off its slow underflow path and keeps responsibility × moment products in the M-step
@@ -91,6 +98,59 @@ _PARAMETERS = {
 _FITTED = ("weights_", "means_", "precisions_cholesky_", "covariances_")
 
 
+class NotFittedError(InputError, _SklearnNotFittedError):
+    """A model used before it was fitted: a :class:`dgmm.InputError` and scikit-learn's ``NotFittedError``."""
+
+
+@dataclass(frozen=True)
+class _Layout:
+    """Columns of the moment table in dimension ``d``.
+
+    ``rows, cols``: the upper triangle of a symmetric d×d matrix, diagonal first, then the off-diagonals row by row
+    (in 3-D: (0,0), (1,1), (2,2), (0,1), (0,2), (1,2)); ``n_second = d(d+1)/2`` columns of it, then ``d`` of the
+    mean, a one, and the constant column: ``n_features = n_second + d + 2``. The M-step sums are the first
+    ``n_sums = n_features − 1`` columns.
+    """
+
+    d: int
+    rows: np.ndarray
+    cols: np.ndarray
+
+    @property
+    def n_second(self):
+        return len(self.rows)
+
+    @property
+    def mean(self):
+        return slice(self.n_second, self.n_second + self.d)
+
+    @property
+    def one(self):
+        return self.n_second + self.d
+
+    @property
+    def n_sums(self):
+        return self.n_second + self.d + 1
+
+    @property
+    def n_features(self):
+        return self.n_second + self.d + 2
+
+
+@functools.lru_cache(maxsize=None)
+def _layout(d):
+    """The :class:`_Layout` of dimension ``d``."""
+    upper_rows, upper_cols = np.triu_indices(d, 1)
+    diagonal = np.arange(d)
+    return _Layout(d, np.concatenate([diagonal, upper_rows]), np.concatenate([diagonal, upper_cols]))
+
+
+def _layout_of(n_features):
+    """The :class:`_Layout` whose table has ``n_features`` columns."""
+    d = int(round((np.sqrt(8 * n_features - 15) - 3) / 2))  # n_features = d(d+1)/2 + d + 2
+    return _layout(d)
+
+
 def _check_bound(bound):
     """FitError unless the EM bound is finite."""
     if not np.isfinite(bound):
@@ -109,7 +169,10 @@ def _finite_mean(log_likelihoods, weights=None):
 
 def _check_array(name, value, shape):
     """``value`` as a finite float64 array of ``shape``, or an InputError naming it."""
-    array = np.asarray(value, dtype=np.float64)
+    try:
+        array = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"{name} is not a numeric array: {exc}") from None
     if array.shape != shape:
         raise InputError(f"{name} must have shape {shape}, got {array.shape}")
     if not np.all(np.isfinite(array)):
@@ -122,9 +185,9 @@ def _unit(deviations, covariances, weights):
 
     Parameters
     ----------
-    deviations : ndarray of shape (n, 3)
+    deviations : ndarray of shape (n, d)
         Means minus their centre ``c``.
-    covariances : ndarray of shape (n, 3, 3)
+    covariances : ndarray of shape (n, d, d)
     weights : ndarray of shape (n,)
 
     Returns
@@ -133,7 +196,7 @@ def _unit(deviations, covariances, weights):
         ``2**e`` with ``radius / 2 < unit <= radius``; 1 when the radius is 0 (every primitive one point).
     radius : float
     """
-    variances = np.reshape(covariances, (-1, 9))[:, [0, 4, 8]]
+    variances = np.diagonal(covariances, axis1=1, axis2=2)
     peak = max(np.abs(deviations).max(), np.sqrt(np.abs(variances).max()))
     if peak == 0:
         return 1.0, 0.0
@@ -150,53 +213,58 @@ def _unit(deviations, covariances, weights):
 # ---------------------------------------------------------------------------------------------------------
 
 def _moment_features(means, covariances, centre, scale, unit=1.0, out=None):
-    """Feature table ``(n_prims, 11)`` of the centred moments of primitives given by means and covariances.
+    """Feature table ``(n_prims, n_features)`` of the centred moments of primitives given by means and covariances.
 
-    Columns 0–5 hold the upper triangle of ``E[x xᵀ]`` (off-diagonals doubled), 6–8 the mean, 9 a one; all
-    ten multiplied by the E-step ``scale`` (None: unscaled). Column 10 is an unscaled one that carries the
-    per-component constant. Then ``features @ _component_coefficients(...)ᵀ`` is ``log rho``. Moments are of
-    ``(x − centre) / unit``, computed without forming the data-unit second moments (which overflow at 1e155).
-    Written into ``out`` when given.
+    In the :class:`_Layout` of their dimension (3-D: 11 columns): the upper triangle of ``E[x xᵀ]`` (off-diagonals
+    doubled), the mean, a one; all multiplied by the E-step ``scale`` (None: unscaled). The last column is an
+    unscaled one that carries the per-component constant. Then ``features @ _component_coefficients(...)ᵀ`` is
+    ``log rho``. Moments are of ``(x − centre) / unit``, computed without forming the data-unit second moments
+    (which overflow at 1e155). Written into ``out`` when given.
     """
+    layout = _layout(means.shape[1])
+    rows, cols, n_second, n_sums = layout.rows, layout.cols, layout.n_second, layout.n_sums
     means = (means - centre) / unit
-    features = np.empty((len(means), 11)) if out is None else out
-    np.divide(covariances[:, _ROWS, _COLS], unit**2, out=features[:, :6])
-    features[:, :6] += means[:, _ROWS] * means[:, _COLS]
-    features[:, 3:6] *= 2.0
-    features[:, 6:9] = means
-    features[:, 9] = 1.0
+    features = np.empty((len(means), layout.n_features)) if out is None else out
+    np.divide(covariances[:, rows, cols], unit**2, out=features[:, :n_second])
+    features[:, :n_second] += means[:, rows] * means[:, cols]
+    features[:, layout.d:n_second] *= 2.0
+    features[:, layout.mean] = means
+    features[:, layout.one] = 1.0
     if scale is not None:
-        features[:, :10] *= np.reshape(scale, (-1, 1))
-    features[:, 10] = 1.0
+        features[:, :n_sums] *= np.reshape(scale, (-1, 1))
+    features[:, n_sums] = 1.0
     return features
 
 
 def _moment_table(prims, centre, unit):
-    """:func:`_moment_features` (unscaled) of all ``prims``, built chunk by chunk so that its (n_prims, 3, 3)
+    """:func:`_moment_features` (unscaled) of all ``prims``, built chunk by chunk so that its (n_prims, d, d)
     temporaries never exist for all primitives at once."""
-    table = np.empty((len(prims), 11))
-    for start in range(0, len(prims), _TABLE_CHUNK):
-        rows = slice(start, start + _TABLE_CHUNK)
+    d = prims.dimension
+    table = np.empty((len(prims), _layout(d).n_features))
+    chunk = max(1, _TABLE_CHUNK * 9 // d**2)
+    for start in range(0, len(prims), chunk):
+        rows = slice(start, start + chunk)
         _moment_features(prims.means[rows], prims.covariances[rows], centre, None, unit, out=table[rows])
     return table
 
 
 def _component_coefficients(weights, means, precisions_cholesky, unit=1.0):
-    """Coefficients ``(n_components, 11)`` such that features · coefficients = log rho (E-step).
+    """Coefficients ``(n_components, n_features)`` such that features · coefficients = log rho (E-step).
 
     ``−½ E_p[(x−mu_i)ᵀ Λ_i (x−mu_i)] = −½ (<Λ_i, E_p[x xᵀ]> − 2 mu_iᵀ Λ_i mu_p + mu_iᵀ Λ_i mu_i)``, plus
-    ``log lambda_i − 3/2 log 2π + ½ log det Λ_i`` on the constant column. Parameters are in internal units
+    ``log lambda_i − d/2 log 2π + ½ log det Λ_i`` on the constant column. Parameters are in internal units
     (data / ``unit``); the log-determinant is the data-unit one, so that ``log rho`` is a data-unit density.
     """
+    layout = _layout(means.shape[1])
     precisions = precisions_cholesky @ np.swapaxes(precisions_cholesky, 1, 2)
     precision_means = np.einsum("kij,kj->ki", precisions, means)
     log_det = np.log(np.diagonal(precisions_cholesky, axis1=1, axis2=2) / unit).sum(axis=1)
-    coefficients = np.empty((len(weights), 11))
-    coefficients[:, :6] = -0.5 * precisions[:, _ROWS, _COLS]
-    coefficients[:, 6:9] = precision_means
-    coefficients[:, 9] = -0.5 * np.einsum("ki,ki->k", means, precision_means)
+    coefficients = np.empty((len(weights), layout.n_features))
+    coefficients[:, :layout.n_second] = -0.5 * precisions[:, layout.rows, layout.cols]
+    coefficients[:, layout.mean] = precision_means
+    coefficients[:, layout.one] = -0.5 * np.einsum("ki,ki->k", means, precision_means)
     with np.errstate(divide="ignore"):
-        coefficients[:, 10] = np.log(weights) - 1.5 * _LOG_2PI + log_det
+        coefficients[:, layout.n_sums] = np.log(weights) - (0.5 * layout.d) * _LOG_2PI + log_det
     return coefficients
 
 
@@ -238,26 +306,60 @@ def _log_normaliser(log_rho):
 
 
 def _scaled_table(table, scale):
-    """The moment table with the E-step ``scale`` (n_rows,) on its columns 0–9, made once per fit: the table
-    itself when every scale is 1 (textbook EM)."""
+    """The moment table with the E-step ``scale`` (n_rows,) on its columns but the last, made once per fit: the
+    table itself when every scale is 1 (textbook EM)."""
     if np.all(scale == 1.0):
         return table
     scaled = table.copy()
-    scaled[:, :10] *= scale[:, None]
+    scaled[:, :-1] *= scale[:, None]
     return scaled
 
 
-def _e_step_block(features, coefficients, rows, out):
-    """The E-step of the primitives ``rows``: ``rho / max_i rho`` (in ``out``, (n_components, n_rows)), each
-    primitive's sum of it, and its log-normaliser.
+@dataclass(frozen=True)
+class _FitInputs:
+    """What EM's iterations read, made once per fit: the moment table in internal units (module docstring), its
+    copy with the E-step scale (:func:`_scaled_table`), the M-step weights, the screen, and a buffer that each
+    E-step fills with every primitive's log-normaliser."""
 
-    Responsibilities are ``rho`` over that sum; the M-step divides its weights by the sums instead of dividing
-    every responsibility. ``features`` is the moment table with the E-step scale (:func:`_scaled_table`). A screened
-    fit runs :func:`dgmm.compiled.e_step.screened_e_step_sums` instead, this and the M-step sums in one kernel.
+    table: np.ndarray
+    features: np.ndarray
+    mstep_weights: np.ndarray
+    unit: float
+    screen: float | None
+    log_norm: np.ndarray
+
+
+def _block_sums(inputs, coefficients, rows, out):
+    """The E-step of the primitives ``rows`` and its M-step sums (:func:`_m_step_sums`); their log-normalisers
+    into ``inputs.log_norm``.
+
+    ``rho / max_i rho`` goes into ``out`` ((n_components, n_rows)); responsibilities are it over each primitive's
+    sum, and the M-step divides its weights by the sums instead of dividing every responsibility.
     """
-    rho = np.dot(coefficients, features[rows].T, out=out)  # the E-step's per-primitive passes run down its rows
-    peak, total = _exp_shifted_in_place(rho)
-    return rho, total, peak + np.log(total)
+    rho = np.dot(coefficients, inputs.features[rows].T, out=out)  # the per-primitive passes run down its rows
+    peak, total = _exp_shifted(rho, inputs.screen)
+    inputs.log_norm[rows] = peak + np.log(total)
+    return _m_step_sums(rho, inputs.table[rows, :-1], inputs.mstep_weights[rows] / total)
+
+
+def _screened_block_sums(inputs, transposed_coefficients, rows, out):
+    """:func:`_block_sums` of a screened 3-D fit, in one compiled kernel over the pairs within the screen
+    (:func:`dgmm.compiled.e_step.screened_e_step_sums`)."""
+    from dgmm.compiled.e_step import screened_e_step_sums  # numba loads only for screened fits
+    return screened_e_step_sums(inputs.features[rows], transposed_coefficients, inputs.table[rows, :-1],
+                                inputs.mstep_weights[rows], float(inputs.screen), inputs.log_norm[rows])
+
+
+def _e_step(inputs, params, blocks):
+    """EM's E-step under ``params`` (weights, means, precision Choleskys in internal units), block by block: the
+    M-step sums of its responsibilities and the bound (the size-weighted mean of the log-normalisers)."""
+    coefficients = _component_coefficients(*params, unit=inputs.unit)
+    if inputs.screen is not None and coefficients.shape[1] == _layout(3).n_features:
+        block = functools.partial(_screened_block_sums, inputs, np.ascontiguousarray(coefficients.T))
+    else:
+        block = functools.partial(_block_sums, inputs, coefficients)
+    sums = blocks.run(block)
+    return sums, np.dot(inputs.mstep_weights, inputs.log_norm) / inputs.mstep_weights.sum()
 
 
 class EStep:
@@ -266,7 +368,7 @@ class EStep:
 
     Parameters
     ----------
-    weights, means, covariances, precisions_cholesky : ndarrays of shape (K,), (K, 3), (K, 3, 3), (K, 3, 3)
+    weights, means, covariances, precisions_cholesky : ndarrays of shape (K,), (K, d), (K, d, d), (K, d, d)
         In data units (a fitted mixture's attributes, or its ``e_step_params_``).
     screen : float or None, default=None
         :class:`GaussianMixture`'s ``screen``, for responsibilities as a screened fit's E-step computes them.
@@ -294,7 +396,7 @@ class EStep:
         for start in range(0, len(means), rows):
             block = slice(start, start + rows)
             count = len(means[block])
-            features = np.empty((-(-count // tile) * tile, 11))
+            features = np.empty((-(-count // tile) * tile, self.coefficients.shape[1]))
             features[count:] = 0.0
             _moment_features(means[block], covariances[block], self.centre, scale[block], self.unit,
                              out=features[:count])
@@ -314,7 +416,7 @@ def responsibilities(prims, weights, means, covariances, precisions_cholesky, sc
     Parameters
     ----------
     prims : Primitives
-    weights, means, covariances, precisions_cholesky : ndarrays of shape (K,), (K, 3), (K, 3, 3), (K, 3, 3)
+    weights, means, covariances, precisions_cholesky : ndarrays of shape (K,), (K, d), (K, d, d), (K, d, d)
         In data units (a fitted mixture's attributes, or its ``e_step_params_``).
     scale : float or ndarray of shape (n_prims,), default=1.0
         The E-step's factor on each primitive's expected log-density (a variant's, :mod:`dgmm.variants`; 1 is
@@ -325,24 +427,26 @@ def responsibilities(prims, weights, means, covariances, precisions_cholesky, sc
 
 
 def _m_step_sums(resp, moments, row_weights):
-    """``resp ·`` (``moments``, columns 0–9 of the moment table's rows, × ``row_weights``, their M-step
-    weights): every component's mass, first and second moment sums (eqs. 12, 13), shape (n_components, 10).
-    ``resp`` is (n_components, n_rows)."""
+    """``resp ·`` (``moments``, the moment table's rows but their last column, × ``row_weights``, their M-step
+    weights): every component's second and first moment sums and mass (eqs. 12, 13), shape (n_components,
+    n_sums), 10 in 3-D. ``resp`` is (n_components, n_rows)."""
     return resp @ (moments * row_weights[:, None])
 
 
 def _m_step(sums, reg_covar):
     """Mixture parameters (weights, centred means, precision Choleskys, covariances) from the M-step sums
     (:func:`_m_step_sums` added over all primitives)."""
-    mass = sums[:, 9] + _EPS
-    means = sums[:, 6:9] / mass[:, None]
-    second = np.empty((len(mass), 3, 3))
-    upper = sums[:, :6] / mass[:, None]
-    upper[:, 3:6] *= 0.5
-    second[:, _ROWS, _COLS] = upper
-    second[:, _COLS, _ROWS] = upper
+    layout = _layout_of(sums.shape[1] + 1)
+    d, rows, cols = layout.d, layout.rows, layout.cols
+    mass = sums[:, layout.one] + _EPS
+    means = sums[:, layout.mean] / mass[:, None]
+    second = np.empty((len(mass), d, d))
+    upper = sums[:, :layout.n_second] / mass[:, None]
+    upper[:, d:] *= 0.5
+    second[:, rows, cols] = upper
+    second[:, cols, rows] = upper
     covariances = second - means[:, :, None] * means[:, None, :]
-    covariances[:, [0, 1, 2], [0, 1, 2]] += reg_covar
+    covariances[:, np.arange(d), np.arange(d)] += reg_covar
     return mass / mass.sum(), means, _precisions_cholesky(covariances), covariances
 
 
@@ -405,8 +509,19 @@ _INIT_RESP = {"kmeans": _kmeans_resp, "random": _random_resp}
 # The estimator
 # ---------------------------------------------------------------------------------------------------------
 
-class GaussianMixture(BaseEstimator):
-    """A full-covariance Gaussian mixture fitted by EM to points, triangles or any primitives.
+def _one_line(exc):
+    """A scikit-learn validation message on one line: its lines but those printing the array."""
+    lines = [line.strip() for line in str(exc).splitlines()]
+    return " ".join(line for line in lines if line and not line.startswith(("array=", "[")))
+
+
+class GaussianMixture(DensityMixin, BaseEstimator):
+    """A full-covariance Gaussian mixture fitted by EM to points, triangles or any primitives, in any dimension.
+
+    A scikit-learn estimator (its estimator checks pass): array input is validated by scikit-learn's
+    ``validate_data`` (its messages, as :class:`dgmm.InputError`), ``n_features_in_`` is set by ``fit`` and checked
+    by every method after it, and a method called before ``fit`` raises :class:`NotFittedError`. Points and
+    Gaussians may have any dimension ``d >= 1``, triangles ``d >= 2``.
 
     Parameters
     ----------
@@ -427,8 +542,8 @@ class GaussianMixture(BaseEstimator):
     random_state : int, numpy.random.Generator or None, default=None
         Seeds ``np.random.default_rng``; the same seed gives bit-identical fits.
     weights_init : array-like of shape (n_components,), optional
-    means_init : array-like of shape (n_components, 3), optional
-    precisions_init : array-like of shape (n_components, 3, 3), optional
+    means_init : array-like of shape (n_components, d), optional
+    precisions_init : array-like of shape (n_components, d, d), optional
         User starting values; those given replace the ones ``init`` computes.
     variant : {"textbook", "authors"}, default="textbook"
         "textbook" is EM for the bound above. "authors" reproduces the authors' published fitting code
@@ -452,14 +567,17 @@ class GaussianMixture(BaseEstimator):
         None: every (component, primitive) pair enters the E-step, as in the paper. A number ``s`` (beyond the
         paper): pairs whose term is below ``e^-s`` of the primitive's largest get responsibility 0 and no
         exponential (:mod:`dgmm.compiled.e_step`); at ``s = 50`` the fit is the unscreened one to rounding, in a
-        fraction of the E-step's time on surfaces. The k-means start and scoring are not screened.
+        fraction of the E-step's time on surfaces (3-D; in other dimensions the exponentials alone are
+        screened). The k-means start and scoring are not screened.
 
     Attributes
     ----------
     weights_ : ndarray of shape (n_components,)
-    means_ : ndarray of shape (n_components, 3)
-    covariances_ : ndarray of shape (n_components, 3, 3)
-    precisions_cholesky_ : ndarray of shape (n_components, 3, 3)
+    means_ : ndarray of shape (n_components, d)
+    covariances_ : ndarray of shape (n_components, d, d)
+    precisions_cholesky_ : ndarray of shape (n_components, d, d)
+    n_features_in_ : int
+        The dimension ``d`` of the input.
     n_iter_ : int
     converged_ : bool
     lower_bound_ : float
@@ -498,8 +616,8 @@ class GaussianMixture(BaseEstimator):
         Parameters
         ----------
         weights : array-like of shape (n_components,)
-        means : array-like of shape (n_components, 3)
-        covariances : array-like of shape (n_components, 3, 3)
+        means : array-like of shape (n_components, d)
+        covariances : array-like of shape (n_components, d, d)
             Symmetric positive definite, else FitError.
         **params
             Other estimator parameters (``random_state``, ...).
@@ -507,8 +625,10 @@ class GaussianMixture(BaseEstimator):
         k = len(weights)
         model = cls(n_components=k, **params)
         model.weights_ = _check_array("weights", weights, (k,))
-        model.means_ = _check_array("means", means, (k, 3))
-        model.covariances_ = _check_array("covariances", covariances, (k, 3, 3))
+        d = np.shape(means)[-1] if np.ndim(means) == 2 else 3
+        model.means_ = _check_array("means", means, (k, d))
+        model.covariances_ = _check_array("covariances", covariances, (k, d, d))
+        model.n_features_in_ = d
         model.precisions_cholesky_ = _precisions_cholesky(model.covariances_)
         return model
 
@@ -519,18 +639,17 @@ class GaussianMixture(BaseEstimator):
                 raise InputError(f"GaussianMixture {name}={value!r}: must be {expected}")
         n_present = int(np.count_nonzero(prims.weights))
         if self.n_components > n_present:
-            raise InputError(
-                f"n_components={self.n_components} is larger than the {n_present} primitives of positive size"
-            )
+            raise InputError(f"n_components={self.n_components} is larger than the {n_present} primitives of "
+                             f"positive size (n_samples = {n_present})")
 
     def _initial_params(self, prims, centre, unit, table, mstep_weights, blocks, rng):
         """Starting (weights, means, precision Choleskys) in internal units: from ``init``, replaced by user
         values."""
-        k = self.n_components
+        k, d = self.n_components, prims.dimension
         user = (self.weights_init, self.means_init, self.precisions_init)
         if any(value is None for value in user):
             resp = _INIT_RESP[self.init](prims.means / unit, mstep_weights, k, rng)
-            sums = blocks.run(lambda rows, out: _m_step_sums(resp(rows, out), table[rows, :10], mstep_weights[rows]),
+            sums = blocks.run(lambda rows, out: _m_step_sums(resp(rows, out), table[rows, :-1], mstep_weights[rows]),
                               threads=False)
             weights, means, prec_chol, _ = _m_step(sums, self.reg_covar / unit**2)
         if self.weights_init is not None:
@@ -538,9 +657,9 @@ class GaussianMixture(BaseEstimator):
             if np.any(weights < 0) or not np.isclose(weights.sum(), 1.0):
                 raise InputError("weights_init must be non-negative and sum to 1")
         if self.means_init is not None:
-            means = (_check_array("means_init", self.means_init, (k, 3)) - centre) / unit
+            means = (_check_array("means_init", self.means_init, (k, d)) - centre) / unit
         if self.precisions_init is not None:
-            precisions = _check_array("precisions_init", self.precisions_init, (k, 3, 3))
+            precisions = _check_array("precisions_init", self.precisions_init, (k, d, d))
             try:  # any factor with U Uᵀ = precision serves; scikit-learn takes the lower Cholesky here too
                 prec_chol = np.linalg.cholesky(precisions) * unit
             except np.linalg.LinAlgError:
@@ -574,46 +693,28 @@ class GaussianMixture(BaseEstimator):
 
         Parameters
         ----------
-        X : array-like of shape (n_points, 3), Primitives, or trimesh.Trimesh
+        X : array-like of shape (n_points, d), Primitives, or trimesh.Trimesh
             Points, any primitives, or a mesh (fitted as exact triangles).
+        y : ignored
 
         Returns
         -------
         self
         """
-        prims = as_primitives(X)
+        prims = self._primitives(X, reset=True)
         self._check_parameters(prims)
         scale, mstep_weights = VARIANTS[self.variant](prims.weights)
         centre, unit = self._frame(prims, mstep_weights)
         table = _moment_table(prims, centre, unit)
-        features = _scaled_table(table, scale)
+        inputs = _FitInputs(table, _scaled_table(table, scale), mstep_weights, unit, self.screen, np.empty(len(prims)))
         reg_covar = self.reg_covar / unit**2
         rng = np.random.default_rng(self.random_state)
-        log_norm = np.empty(len(prims))
-
-        def e_step(params, blocks):
-            """E-step block by block: the M-step sums of its responsibilities and the bound (size-weighted
-            mean of the log-normalisers)."""
-            coefficients = _component_coefficients(*params, unit=unit)
-            if self.screen is None:
-                def block(rows, out):
-                    rho, total, log_norm[rows] = _e_step_block(features, coefficients, rows, out)
-                    return _m_step_sums(rho, table[rows, :10], mstep_weights[rows] / total)
-            else:  # the same in one kernel, over the pairs within the screen
-                from dgmm.compiled.e_step import screened_e_step_sums  # numba loads only for screened fits
-                transposed = np.ascontiguousarray(coefficients.T)
-
-                def block(rows, out):
-                    return screened_e_step_sums(features[rows], transposed, table[rows, :10], mstep_weights[rows],
-                                                float(self.screen), log_norm[rows])
-            sums = blocks.run(block)
-            return sums, np.dot(mstep_weights, log_norm) / mstep_weights.sum()
-
-        with BlockPass(len(prims), self.n_components, self.memory_limit, self.n_jobs) as blocks:
+        row_floats = 2 * table.shape[1] + 2
+        with BlockPass(len(prims), self.n_components, self.memory_limit, self.n_jobs, row_floats) as blocks:
             try:
                 params = self._initial_params(prims, centre, unit, table, mstep_weights, blocks, rng)
                 del prims  # the loop needs only the moment table (the caller may still hold the input)
-                sums, bound = e_step(params, blocks)
+                sums, bound = _e_step(inputs, params, blocks)
                 _check_bound(bound)
             except FitError as exc:
                 raise FitError(f"EM initialisation ({self.init}): {exc}") from None
@@ -625,7 +726,7 @@ class GaussianMixture(BaseEstimator):
                 try:
                     params = _m_step(sums, reg_covar)
                     if scored:
-                        sums, bound = e_step(params[:3], blocks)
+                        sums, bound = _e_step(inputs, params[:3], blocks)
                         _check_bound(bound)
                     self._store(params, centre, unit)
                 except FitError as exc:
@@ -645,15 +746,45 @@ class GaussianMixture(BaseEstimator):
                                np.linalg.inv(prec_chol @ np.swapaxes(prec_chol, 1, 2)), prec_chol)
         return self
 
+    # -- input -------------------------------------------------------------------------------------------
+
+    def _primitives(self, X, reset):
+        """``X`` as Primitives: an array through scikit-learn's ``validate_data`` (its messages, first line, as
+        InputError), then the library's checks. ``reset``: set ``n_features_in_`` (fit), else check against it."""
+        if isinstance(X, Primitives) or (hasattr(X, "faces") and hasattr(X, "vertices")):
+            prims = as_primitives(X)
+            if reset:
+                self.n_features_in_ = prims.dimension
+                return prims
+        else:
+            try:
+                X = validate_data(self, X, reset=reset, dtype=np.float64)
+            except TypeError as exc:  # a sparse matrix
+                raise InputTypeError(_one_line(exc)) from None
+            except ValueError as exc:
+                raise InputError(_one_line(exc)) from None
+            return Primitives.from_points(X)
+        expected = getattr(self, "n_features_in_", self.means_.shape[1])  # a model set up by hand may lack it
+        if prims.dimension != expected:
+            raise InputError(f"X has {prims.dimension} features, but {type(self).__name__} is expecting "
+                             f"{expected} features as input")
+        return prims
+
     # -- evaluation -------------------------------------------------------------------------------------
 
     def _check_fitted(self):
-        if not hasattr(self, "means_"):
-            raise InputError("this GaussianMixture is not fitted yet: call fit first")
+        try:
+            check_is_fitted(self, _FITTED)
+        except _SklearnNotFittedError as exc:
+            raise NotFittedError(_one_line(exc)) from None
+
+    def _checked(self, X):
+        """``X`` as Primitives for a method of the fitted mixture (NotFittedError before ``fit``)."""
+        self._check_fitted()
+        return self._primitives(X, reset=False)
 
     def _log_rho_blocks(self, prims):
         """``log rho`` of the fitted mixture (textbook E-step), block by block over the primitives."""
-        self._check_fitted()
         return EStep(self.weights_, self.means_, self.covariances_,
                      self.precisions_cholesky_).log_rho_blocks(prims.means, prims.covariances)
 
@@ -667,15 +798,17 @@ class GaussianMixture(BaseEstimator):
     def score_samples(self, X):
         """Log-likelihood of each point, shape (n_points,).
 
-        ``X``: points (n_points, 3), or ``Primitives.from_points`` of them, so that a set scored under many mixtures
+        ``X``: points (n_points, d), or ``Primitives.from_points`` of them, so that a set scored under many mixtures
         is checked and laid out once.
         """
-        if not isinstance(X, Primitives):
-            return self._log_norm(Primitives.from_points(X))
-        if np.any(X.covariances):
+        if hasattr(X, "faces") and hasattr(X, "vertices"):
+            raise InputError("score_samples takes points, and this is a mesh: use primitive_bounds or "
+                             "score_primitives")
+        prims = self._checked(X)
+        if np.any(prims.covariances):
             raise InputError("score_samples takes points, and these primitives have covariances: use "
                              "primitive_bounds or score_primitives")
-        return self._log_norm(X)
+        return self._log_norm(prims)
 
     def score(self, X, y=None):
         """Mean log-likelihood of the points (``X`` as in :meth:`score_samples`)."""
@@ -686,7 +819,7 @@ class GaussianMixture(BaseEstimator):
 
         For a point it is its log-likelihood; for a triangle, a lower bound of its mean log-likelihood.
         """
-        return self._log_norm(as_primitives(X))
+        return self._log_norm(self._checked(X))
 
     def score_primitives(self, X):
         """Size-weighted mean of :meth:`primitive_bounds`.
@@ -694,27 +827,26 @@ class GaussianMixture(BaseEstimator):
         For points it is the mean log-likelihood; for a mesh it is the triangle bound of eq. 11, a lower bound
         of the surface-averaged log-likelihood.
         """
-        prims = as_primitives(X)
+        prims = self._checked(X)
         return _finite_mean(self._log_norm(prims), prims.weights)
 
     def predict(self, X):
         """Index of the most responsible component for each point or primitive."""
-        prims = as_primitives(X)
+        prims = self._checked(X)
         return np.concatenate([block.argmax(axis=0) for block in self._log_rho_blocks(prims)])
 
     def predict_proba(self, X):
         """Responsibilities ``eta`` of each component for each point or primitive, shape (n, n_components)."""
-        self._check_fitted()
-        return responsibilities(as_primitives(X), self.weights_, self.means_, self.covariances_,
+        return responsibilities(self._checked(X), self.weights_, self.means_, self.covariances_,
                                 self.precisions_cholesky_)
 
     def sample(self, n_samples=1):
-        """Draw ``n_samples`` points; returns (X of shape (n_samples, 3), component labels)."""
+        """Draw ``n_samples`` points; returns (X of shape (n_samples, d), component labels)."""
         self._check_fitted()
         if not _is_int(1)(n_samples):
             raise InputError(f"n_samples={n_samples!r}: must be an integer >= 1")
         rng = np.random.default_rng(self.random_state)
         labels = np.sort(rng.choice(self.n_components, size=n_samples, p=self.weights_))
         lower = np.linalg.cholesky(self.covariances_)
-        noise = rng.standard_normal((n_samples, 3))
+        noise = rng.standard_normal((n_samples, self.means_.shape[1]))
         return self.means_[labels] + np.einsum("nij,nj->ni", lower[labels], noise), labels

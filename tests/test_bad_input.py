@@ -108,7 +108,8 @@ CASES = {
     "score unfitted": Lib(lambda c: GaussianMixture(2).score(points()), InputError, "not fitted"),
     "score NaN": Lib(lambda c: c.model.score(NAN_POINTS), InputError, "NaN"),
     "score points too far": Lib(lambda c: c.model.score(points() + 1e152), InputError, "too far"),
-    "score_primitives shape": Lib(lambda c: c.model.score_primitives(np.zeros((4, 2))), InputError, "shape"),
+    "score_primitives shape": Lib(lambda c: c.model.score_primitives(np.zeros((4, 2))), InputError,
+                                  "X has 2 features, but GaussianMixture is expecting 3"),
     "sample n_samples=0": Lib(lambda c: c.model.sample(0), InputError, "n_samples=0"),
     "from_parameters not positive definite": Lib(
         lambda c: GaussianMixture.from_parameters([1.0], np.zeros((1, 3)), -np.eye(3)[None]), FitError,

@@ -136,8 +136,8 @@ def test_tol_none_runs_every_iteration_without_the_final_e_step_as_scikit_learn_
         init = dict(weights_init=start.weights_, means_init=start.means_, precisions_init=start.precisions_)
         reference = SklearnGaussianMixture(7, max_iter=3, tol=0, **init).fit(points)
     e_steps = []
-    e_step_block = dgmm.mixture._e_step_block
-    monkeypatch.setattr(dgmm.mixture, "_e_step_block", lambda *args: e_steps.append(1) or e_step_block(*args))
+    e_step = dgmm.mixture._e_step
+    monkeypatch.setattr(dgmm.mixture, "_e_step", lambda *args: e_steps.append(1) or e_step(*args))
     ours = GaussianMixture(7, max_iter=3, tol=None, **init).fit(points)
 
     assert len(e_steps) == 3
@@ -373,7 +373,8 @@ def test_callback_sees_every_iteration(bunny_res4):
         (dict(n_components=2, weights_init=[0.9, 0.9]), None, "sum to 1"),
         (dict(n_components=2, precisions_init=-np.stack([np.eye(3)] * 2)), None, "positive definite"),
         (dict(), np.full((5, 3), np.nan), "NaN"),
-        (dict(), np.zeros((5, 4)), "shape"),
+        (dict(), np.zeros(5), "Expected 2D array.*Reshape your data"),
+        (dict(), np.zeros((5, 0)), "0 feature"),
     ],
 )
 def test_bad_input_is_one_line_error(bunny_res4, params, data, message):
@@ -390,5 +391,9 @@ def test_singular_covariance_is_a_fit_error():
 
 
 def test_unfitted_model_says_so():
-    with pytest.raises(InputError, match="not fitted"):
-        GaussianMixture(2).score(np.zeros((3, 3)))
+    from sklearn.exceptions import NotFittedError
+
+    for method in ("score", "score_samples", "predict", "predict_proba", "primitive_bounds"):
+        with pytest.raises(InputError, match="not fitted") as info:
+            getattr(GaussianMixture(2), method)(np.zeros((3, 3)))
+        assert isinstance(info.value, NotFittedError)
