@@ -91,7 +91,7 @@ def test_primitives_are_immutable():
     "make, message",
     [
         (lambda: Primitives.from_points(np.zeros((0, 3))), "points is empty"),
-        (lambda: Primitives.from_points(np.zeros((4, 2))), r"points must have shape \(n, 3\)"),
+        (lambda: Primitives.from_points(np.zeros((4, 0))), r"points must have shape \(n, d\) with d >= 1"),
         (lambda: Primitives.from_points([[0, 0, np.nan]]), "points contains NaN"),
         (lambda: Primitives.from_points(np.zeros((2, 3)), weights=[1, -1]), "non-negative"),
         (lambda: Primitives.from_points(np.zeros((2, 3)), weights=[0, 0]), "all zero"),

@@ -1,0 +1,117 @@
+"""GaussianMixture in any dimension against independent references: scikit-learn step for step on points,
+Monte Carlo and closed forms for triangles and Gaussian primitives."""
+import warnings
+
+import numpy as np
+import pytest
+from scipy.stats import multivariate_normal
+from sklearn.mixture import GaussianMixture as SklearnGaussianMixture
+
+from dgmm import GaussianMixture, InputError, Primitives
+from tests.test_primitives import uniform_in_triangle
+
+PARAMETERS = ("weights_", "means_", "covariances_", "precisions_cholesky_")
+
+
+def clustered_points(d, n, n_clusters, seed):
+    """``n`` points in ``d`` dimensions around ``n_clusters`` centres with random full covariances."""
+    rng = np.random.default_rng(seed)
+    centres = rng.normal(scale=4.0, size=(n_clusters, d))
+    mixing = rng.normal(size=(n_clusters, d, d)) / np.sqrt(d) + np.eye(d)
+    labels = rng.integers(n_clusters, size=n)
+    return centres[labels] + np.einsum("nij,nj->ni", mixing[labels], rng.normal(size=(n, d)))
+
+
+@pytest.mark.parametrize("d", [1, 2, 3, 8, 32])
+@pytest.mark.parametrize("max_iter", [1, 2, 3])
+def test_points_equal_scikit_learn_step_for_step(d, max_iter):
+    """From scikit-learn's starting parameters, ``max_iter`` EM iterations give scikit-learn's parameters and bounds
+    to 1e-10 of their scale."""
+    points = clustered_points(d, 1500, 3, seed=d)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # scikit-learn warns that a few iterations do not converge
+        start = SklearnGaussianMixture(4, init_params="random", max_iter=1, random_state=0).fit(points)
+        init = dict(weights_init=start.weights_, means_init=start.means_, precisions_init=start.precisions_)
+        reference = SklearnGaussianMixture(4, max_iter=max_iter, tol=0, **init).fit(points)
+    ours = GaussianMixture(4, max_iter=max_iter, tol=None, **init).fit(points)
+
+    assert ours.n_features_in_ == d
+    for name in PARAMETERS:
+        expected = getattr(reference, name)
+        np.testing.assert_allclose(getattr(ours, name), expected, rtol=0, atol=1e-10 * np.abs(expected).max(),
+                                   err_msg=name)
+    np.testing.assert_allclose(ours.history_, reference.lower_bounds_[1:], rtol=0, atol=1e-10)
+    assert ours.lower_bound_ == pytest.approx(reference.lower_bound_, abs=1e-10)
+    np.testing.assert_allclose(ours.score_samples(points), reference.score_samples(points), rtol=0, atol=1e-10)
+    np.testing.assert_allclose(ours.predict_proba(points), reference.predict_proba(points), rtol=0, atol=1e-10)
+
+
+@pytest.mark.parametrize("d", [2, 4])
+def test_triangle_moments_equal_monte_carlo(d):
+    """A triangle's area is the Gram determinant's, its second moment ``E[x xᵀ]`` the Monte Carlo one, and its
+    E-step term ``E_x[log N(x)]`` under a Gaussian the Monte Carlo mean of scipy's log-density."""
+    rng = np.random.default_rng(d)
+    triangle = rng.normal(size=(3, d)) + 0.5
+    prims = Primitives.from_mesh(triangle, [[0, 1, 2]])
+    edges = triangle[1:] - triangle[0]
+    assert prims.weights[0] == pytest.approx(0.5 * np.sqrt(np.linalg.det(edges @ edges.T)), rel=1e-12)
+
+    samples = uniform_in_triangle(triangle, 400_000, rng)
+    outer = samples[:, :, None] * samples[:, None, :]
+    standard_error = outer.std(axis=0) / np.sqrt(len(samples))
+    assert np.all(np.abs(prims.second_moments[0] - outer.mean(axis=0)) < 5 * standard_error + 1e-12)
+
+    mean = rng.normal(size=d)
+    factor = rng.normal(size=(d, d))
+    covariance = factor @ factor.T + np.eye(d)
+    gmm = GaussianMixture.from_parameters([1.0], [mean], [covariance])
+    log_density = multivariate_normal(mean, covariance).logpdf(samples)
+    assert abs(gmm.score_primitives(prims) - log_density.mean()) < 5 * log_density.std() / np.sqrt(len(samples))
+
+
+def test_one_component_fit_to_gaussians_is_their_moment_match():
+    """One component fitted to Gaussian primitives in 5-D is their size-weighted mixture's mean and covariance
+    (plus reg_covar), from the closed form ``Σ_p w_p (Σ_p + μ_p μ_pᵀ) / Σ_p w_p − μ μᵀ``."""
+    rng = np.random.default_rng(1)
+    d, n = 5, 40
+    means = rng.normal(size=(n, d))
+    factors = rng.normal(size=(n, d, d)) * 0.3
+    covariances = factors @ np.swapaxes(factors, 1, 2)
+    sizes = rng.uniform(0.5, 2.0, size=n)
+    gmm = GaussianMixture(1, max_iter=2, reg_covar=1e-6).fit(Primitives.from_gaussians(means, covariances, sizes))
+
+    mean = sizes @ means / sizes.sum()
+    second = np.einsum("p,pij->ij", sizes, covariances + means[:, :, None] * means[:, None, :]) / sizes.sum()
+    np.testing.assert_allclose(gmm.means_[0], mean, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(gmm.covariances_[0], second - np.outer(mean, mean) + 1e-6 * np.eye(d),
+                               rtol=0, atol=1e-12)
+
+
+def test_a_mixture_in_2d_fits_triangles_and_samples_its_dimension():
+    rng = np.random.default_rng(2)
+    vertices = rng.uniform(size=(30, 2))
+    faces = np.array([rng.choice(30, 3, replace=False) for _ in range(40)])
+    gmm = GaussianMixture(3, random_state=0).fit(Primitives.from_mesh(vertices, faces))
+    assert gmm.means_.shape == (3, 2) and gmm.sample(10)[0].shape == (10, 2)
+    with pytest.raises(InputError, match="X has 3 features, but GaussianMixture is expecting 2"):
+        gmm.predict(np.zeros((4, 3)))
+
+
+def test_triangles_need_two_dimensions():
+    with pytest.raises(InputError, match="d >= 2 for triangles"):
+        Primitives.from_mesh(np.zeros((3, 1)), [[0, 1, 2]])
+
+
+def test_screened_fit_outside_3d_is_the_unscreened_one():
+    """At ``screen=50`` terms are dropped only below e^-50 of a primitive's largest: in 2-D (numpy's screened
+    exponentials, not the 3-D kernel) the fit is scikit-learn's unscreened one from the same start."""
+    points = clustered_points(2, 1000, 4, seed=7)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        start = SklearnGaussianMixture(4, init_params="random", max_iter=1, random_state=0).fit(points)
+        init = dict(weights_init=start.weights_, means_init=start.means_, precisions_init=start.precisions_)
+        reference = SklearnGaussianMixture(4, max_iter=5, tol=0, **init).fit(points)
+    ours = GaussianMixture(4, max_iter=5, tol=None, screen=50.0, memory_limit=20_000, **init).fit(points)
+    for name in PARAMETERS:
+        expected = getattr(reference, name)
+        np.testing.assert_allclose(getattr(ours, name), expected, rtol=0, atol=1e-10 * np.abs(expected).max())
