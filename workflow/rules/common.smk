@@ -291,7 +291,11 @@ def checks_outputs():
 
 def report_inputs():
     """Named inputs of the report: the tables of the configured stages and the bunny files the pictures use."""
-    inputs = {"likelihood": rules.likelihood_table.output.likelihood, "fig2": rules.fig2.output.table}
+    inputs = {
+        "likelihood": rules.likelihood_table.output.likelihood,
+        "fig2": rules.fig2.output.table,
+        "authors": rules.authors_data.output.table,
+    }
     if "registration" in config:
         inputs["registration"] = rules.registration_table.output.errors
     if "registration" in config:
@@ -316,7 +320,12 @@ def report_inputs():
 
 def report_figures():
     """Names of the figures the configured stages allow."""
-    configured = {name for e in FIT["experiments"].values() if "bunny" in e["models"] for name in e["inputs"]}
+    configured = {
+        f"{name}@{e['max_iter']}" if e["max_iter"] not in (None, FIT["max_iter"]) else name
+        for e in FIT["experiments"].values()
+        if "bunny" in e["models"]
+        for name in e["inputs"]
+    }
     if "registration" in config:
         configured |= {f"{model}/{mesh}" for model, mesh in REG_EXPERIMENTS}
     return figure_names(report_inputs(), configured)

@@ -23,13 +23,17 @@ import numpy as np
 from dgmm.experiments.report.claims.grading import BAND_ERRORS, Estimate, bootstrap
 from dgmm.experiments.report.claims.measurements import Measurements
 from dgmm.experiments.report.claims.rules import FIG3_MODEL, fitted_variant
-from dgmm.experiments.report.tables import TABLE1_FIT, TABLE1_INPUTS, TABLE1_METHODS, table1_mesh
+from dgmm.experiments.report.tables import (STORED_MAX_ITER, TABLE1_FIT, TABLE1_INPUTS, TABLE1_METHODS, TEXT_MAX_ITER,
+                                            table1_mesh)
 from dgmm.registration.protocol import BUNNY_DIAGONAL
 
 HEADLINE = "authors"
 """The EM whose fits stand beside the authors' data: theirs."""
 ITEMS = {"fig3": "Fig 3", "fig4": "Fig 4", "table1": "Table 1", "fig6": "Fig 6"}
 """The items of the authors' table compared cell by cell, with the report's names."""
+ITERATIONS = {"fig3": TEXT_MAX_ITER, "fig4": STORED_MAX_ITER, "table1": TEXT_MAX_ITER}
+"""The iteration cap each stored likelihood ran at (their stored mean iterations: Fig 4's point fits ran 100), so
+the cap of our fits it stands beside (likelihood.csv's ``max_iter``)."""
 
 
 @dataclass(frozen=True)
@@ -111,10 +115,12 @@ class AuthorsData:
             result.append((key, row))
         return result
 
-    def likelihood_cells(self, estimates):
-        """:class:`Cell` of every stored likelihood against ``estimates`` (``Measurements.estimates``)."""
-        return [Cell(row["item"], _likelihood_label(row), float(row["value"]), row["value"], estimates.get(key),
-                     "nat", row["n_iter"])
+    def likelihood_cells(self, data):
+        """:class:`Cell` of every stored likelihood against our fits at its iteration cap (``data``: our
+        Measurements)."""
+        estimates = {cap: data.at_iterations(cap).estimates for cap in set(ITERATIONS.values())}
+        return [Cell(row["item"], _likelihood_label(row), float(row["value"]), row["value"],
+                     estimates[ITERATIONS[row["item"]]].get(key), "nat", row["n_iter"])
                 for key, row in self.likelihood_keys()]
 
     def fig6_cells(self, errors):
@@ -151,10 +157,11 @@ class AuthorsData:
                                row["value"], ours, row["unit"]))
         return result
 
-    def cells(self, estimates, errors):
-        """Every stored value beside ours: likelihoods (``estimates``), then Table 1's and Fig 6's registration
-        errors (``errors`` of the authors' EM's mixtures, scaled trials)."""
-        return self.likelihood_cells(estimates) + self.table1_cells(errors) + self.fig6_cells(errors)
+    def cells(self, data):
+        """Every stored value beside ours (``data``: our Measurements): likelihoods, then Table 1's and Fig 6's
+        registration errors (the authors' EM's mixtures, scaled trials)."""
+        errors = data.errors(HEADLINE)
+        return self.likelihood_cells(data) + self.table1_cells(errors) + self.fig6_cells(errors)
 
     def fig6_trials(self, errors):
         """``errors`` (ours) with each of Fig 6's methods scaled to its stored mean rotation and translation (None
@@ -188,11 +195,12 @@ class AuthorsData:
                 result.setdefault(key, dict(errors[key]))[name] = scaled(errors[key][name], mean)
         return result
 
-    def stored_estimates(self, estimates, view):
-        """``estimates`` with every cell the authors stored at their value, our standard error kept; cells they did
-        not store are dropped, and so is every textbook-EM mesh cell (their data has only their EM). Where two
-        stored values share a cell, ``view``'s item wins (``"table1"``: Table 1's run, else the figures')."""
-        pairs = self.likelihood_keys()
+    def stored_estimates(self, estimates, view, max_iter):
+        """``estimates`` (ours, at ``max_iter`` iterations) with every cell the authors stored at that cap at their
+        value, our standard error kept; cells they did not store are dropped, and so is every textbook-EM mesh cell
+        (their data has only their EM). Where two stored values share a cell, ``view``'s item wins (``"table1"``:
+        Table 1's run, else the figures')."""
+        pairs = [(key, row) for key, row in self.likelihood_keys() if ITERATIONS[row["item"]] == max_iter]
         preferred = [(row["item"] == "table1") == (view == "table1") for _, row in pairs]
         stored = dict([pair for pair, first in zip(pairs, preferred) if not first]
                       + [pair for pair, first in zip(pairs, preferred) if first])
@@ -213,21 +221,22 @@ def _likelihood_label(row):
 
 @dataclass(frozen=True)
 class StoredMeasurements(Measurements):
-    """Measurements whose likelihood cells are the authors' stored means (:meth:`AuthorsData.stored_estimates`)
-    and whose registration trials (the authors' EM's) are ours scaled to their stored means
-    (:meth:`AuthorsData.fig6_trials`, :meth:`AuthorsData.table1_trials`); every other table is absent, so a claim
-    that needs one is pending on the authors' data."""
+    """Measurements whose likelihood cells are the authors' stored means at the view's iteration cap
+    (:meth:`AuthorsData.stored_estimates` of ours) and whose registration trials (the authors' EM's) are ours scaled
+    to their stored means (:meth:`AuthorsData.fig6_trials`, :meth:`AuthorsData.table1_trials`); every other table is
+    absent, so a claim that needs one is pending on the authors' data."""
 
-    stored: dict = None
+    authors: AuthorsData = None
+    view: str = "figures"
     trials: dict = None
 
     @cached_property
     def estimates(self):
-        return self.stored
+        return self.authors.stored_estimates(Measurements.estimates.func(self), self.view, self.max_iter)
 
     @cached_property
     def means(self):
-        return {key: (value.value, math.nan) for key, value in self.stored.items()}
+        return {key: (value.value, math.nan) for key, value in self.estimates.items()}
 
     def errors(self, variant):
         """The scaled trials for the authors' EM (theirs is the only EM their data has), else None."""
@@ -245,8 +254,8 @@ def authors_measurements(authors, data):
     the views of :data:`VIEWS`."""
     errors = data.errors(HEADLINE)
     trials = {"figures": authors.fig6_trials(errors), "table1": authors.table1_trials(errors)}
-    return {view: StoredMeasurements(likelihood=data.likelihood, stored=authors.stored_estimates(data.estimates, view),
-                                     trials=trials[view]) for view in VIEWS}
+    return {view: StoredMeasurements(likelihood=data.likelihood, all_fits=data.all_fits, max_iter=data.max_iter,
+                                     authors=authors, view=view, trials=trials[view]) for view in VIEWS}
 
 
 VIEWS = {"figures": "Figs 3 and 4's cells; Fig 6's methods on bunny res4, each scaled to the stored mean of its 250 "

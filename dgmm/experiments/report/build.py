@@ -95,7 +95,12 @@ class Loaded:
 
     @cached_property
     def means(self):
-        return tables.likelihood_means(read_csv(self.paths["likelihood"])) if "likelihood" in self.paths else None
+        return self.means_at(tables.TEXT_MAX_ITER)
+
+    def means_at(self, max_iter):
+        """:func:`~.tables.likelihood_means` of the fits capped at ``max_iter`` iterations (None without
+        likelihood.csv)."""
+        return self.measured.at_iterations(max_iter).means if "likelihood" in self.paths else None
 
     @cached_property
     def authors(self):
@@ -107,7 +112,7 @@ class Loaded:
         """Every stored value of the authors' beside ours (() without their table)."""
         if self.authors is None:
             return []
-        return self.authors.cells(self.measured.estimates, self.errors_of("scaled", HEADLINE))
+        return self.authors.cells(self.measured)
 
     def stored(self):
         """The authors' data as the claims read it (None without their table)."""
@@ -153,6 +158,42 @@ class Loaded:
                                       if name in self.paths})
 
 
+EM_LABELS = {"textbook": "textbook EM", "authors": "the authors' EM"}
+LIKELIHOOD_FIGURES = (
+    # number, title, inputs, what is scored, the fits' iteration cap, whether the authors stored this protocol
+    (3, "mesh information (bunny res4)", claims.FIG3_INPUTS, "res4's evaluation points", tables.TEXT_MAX_ITER, True),
+    (4, "decimation and sampling (full bunny)", claims.FIG4_INPUTS, "the full bunny's evaluation points, fits to "
+     "about 1000 primitives", tables.TEXT_MAX_ITER, False),
+    (4, "decimation and sampling (full bunny)", claims.FIG4_INPUTS, "the full bunny's evaluation points, fits to "
+     "about 1000 primitives", tables.STORED_MAX_ITER, True),
+)
+"""Figs 3 and 4, each drawn per EM of the mesh mixtures; Fig 4 at the text's 25 iterations and at the authors'
+stored 100, their stored means overlaid where they ran that protocol."""
+
+
+def _likelihood_figure(number, title, inputs, scored, cap, stored, variant):
+    """The :class:`FigureSpec` of Fig 3 or 4 for one iteration cap and one EM (see :data:`LIKELIHOOD_FIGURES`)."""
+    protocol = "" if number == 3 else (f" at the text's {cap} iterations" if cap == tables.TEXT_MAX_ITER
+                                       else f" at {cap} iterations, as the authors' stored data")
+    suffix = "" if cap == tables.TEXT_MAX_ITER else f"_{cap}"
+    at = "" if cap == tables.TEXT_MAX_ITER else f"@{cap}"  # the workflow's name of an experiment at another cap
+
+    def draw(data):
+        overlay = data.authors.curves(f"fig{number}") if data.authors and stored else None
+        return figures.likelihood_vs_k(tables.likelihood_curves(data.means_at(cap), "bunny", inputs), inputs,
+                                       variant, figures.BAND_SD[number], overlay)
+
+    return FigureSpec(
+        f"fig{number}{suffix}{'_authors' if variant == 'authors' else ''}",
+        f"Fig {number}: {title}{protocol}, mesh mixtures from {EM_LABELS[variant]}", ("likelihood",),
+        tuple(f"{name}{at}" for name in inputs), draw,
+        f"Mean log-likelihood of {scored} vs K (log scale), fits of up to {cap} EM iterations; band "
+        f"±{figures.BAND_SD[number]:g} standard deviation(s) over seeds; y {figures.Y_LIMITS[0]:g} to "
+        f"{figures.Y_LIMITS[1]:g} nats, as the authors drew it. Meshes dashed ({EM_LABELS[variant]}), points solid "
+        "(textbook EM)" + ("; crosses: the authors' stored means (authors.csv)." if stored else
+                           f"; the authors stored Fig 4 at {tables.STORED_MAX_ITER} iterations only (next figures)."))
+
+
 FIGURES = (
     FigureSpec("fig1", "Fig 1: triangles and their covariances", ("res4",), (),
                lambda data: figures.fig1_triangles(data.meshes),
@@ -165,22 +206,7 @@ FIGURES = (
                "points (±1 std over draws). **Diamonds**: our EM bound (with the entropy). **Red lines**: all the "
                "fitted points (solid: the paper's quantity, dashed: mean log-likelihood). The y axis does not start "
                "at zero."),
-    *(FigureSpec(name, f"Fig {number}: {title}, mesh mixtures from {label}", ("likelihood",), inputs,
-                 lambda data, variant=variant, number=number, inputs=inputs: figures.likelihood_vs_k(
-                     tables.likelihood_curves(data.means, "bunny", inputs), inputs, variant, figures.BAND_SD[number],
-                     data.authors.curves(f"fig{number}") if data.authors else None),
-                 f"{what} vs K (log scale), a panel per start, band ±{figures.BAND_SD[number]:g} standard deviation(s) over "
-                 f"seeds, y from {figures.Y_LIMITS[0]:g} to {figures.Y_LIMITS[1]:g} nats, as the authors drew it. "
-                 f"Mesh inputs dashed (fitted with {label}), point inputs solid (textbook EM, the same algorithm); "
-                 "crosses on a dotted line: the authors' stored means of the same input (authors.csv). Collapsed "
-                 "point fits leave the axes below 2 nats, as in the authors' figure.")
-      for number, title, inputs, what in (
-          (3, "mesh information (bunny res4)", claims.FIG3_INPUTS, "Mean log-likelihood of res4's evaluation points"),
-          (4, "decimation and sampling (full bunny)", claims.FIG4_INPUTS,
-           "Mean log-likelihood of the full bunny's evaluation points for fits to about 1000 primitives (quadric and "
-           "clustering decimations, Poisson-disk and random samples)"))
-      for name, variant, label in ((f"fig{number}", "textbook", "textbook EM"),
-                                   (f"fig{number}_authors", "authors", "the authors' EM"))),
+    *(_likelihood_figure(*figure, variant) for figure in LIKELIHOOD_FIGURES for variant in ("textbook", "authors")),
     FigureSpec("fig5", "Fig 5: input and output representations", figures.MESH_KEYS, (),
                lambda data: figures.fig5_representations(data.meshes, figures.pictured_mixtures(data.meshes,
                                                                                                  data.seed)),

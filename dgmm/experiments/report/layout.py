@@ -54,8 +54,7 @@ def _why(claim):
     """The cause of a claim not reproduced, led by what the authors' data says when it does not bear it out."""
     stored = claim.on_stored
     if stored is not None and stored.verdict == grading.NOT:
-        said = (f"{CONTRADICTED} does not bear it out ({stored.ours}): the paper's text against its own data, not a "
-                "failure to reproduce it.")
+        said = f"{CONTRADICTED} does not bear it out either ({stored.ours})."
     elif stored is not None and stored.verdict == grading.PARTLY:
         said = f"{CONTRADICTED} bears it out only partly ({stored.ours})."
     else:

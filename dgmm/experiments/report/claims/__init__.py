@@ -35,13 +35,15 @@ both)."""
 
 def evaluate(data, stored=None):
     """Every claim of ``CLAIMS`` graded on ``data`` (a :class:`Measurements`), in the order of the paper's
-    sections; with ``stored`` (the authors' data: ``view -> Measurements``), each claim of ``ON_STORED`` is graded
-    on its view too (``Claim.on_stored``, the headline EM's grade)."""
+    sections; with ``stored`` (the authors' data: ``view -> Measurements``), each claim of ``ON_STORED`` (or graded
+    at another iteration cap from one) is graded on its view too (``Claim.on_stored``, the headline EM's grade; None
+    where the authors stored nothing at that protocol, such as Fig 4 at 25 iterations)."""
     graded = []
     for claim in CLAIMS:
-        result = claim(data)
-        if stored is not None and claim in ON_STORED:
-            result = replace(result, on_stored=claim(stored[ON_STORED[claim]]).grades[HEADLINE])
+        result, base = claim(data), getattr(claim, "__wrapped__", claim)
+        if stored is not None and base in ON_STORED:
+            grade = claim(stored[ON_STORED[base]]).grades[HEADLINE]
+            result = replace(result, on_stored=None if grade.verdict == PENDING else grade)
         graded.append(result)
     return in_paper_order(graded)
 

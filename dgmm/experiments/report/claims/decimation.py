@@ -249,6 +249,7 @@ def at_stored_iterations(claim):
                        grades=same(missing(STORED_PROTOCOL_NEEDS)))
 
     graded.__name__ = graded.__qualname__ = f"{claim.__name__}_at_{STORED_MAX_ITER}"
+    graded.__wrapped__ = claim
     graded.__doc__ = f"{claim.__doc__}\n\n    Graded on {STORED_PROTOCOL} (:func:`at_stored_iterations`)."
     return graded
 
