@@ -318,6 +318,12 @@ def report_inputs():
     return inputs
 
 
+def table1_trials():
+    """Registration trials Table 1 averages per model: the table1 experiment's (§VI-C: 25), the bunny's being the
+    first of Fig 6's; None (every trial) when the config has no table1 experiment."""
+    return REG["experiments"]["table1"]["trials"] if "table1" in REG["experiments"] else None
+
+
 def report_figures():
     """Names of the figures the configured stages allow."""
     configured = {

@@ -48,5 +48,6 @@ rule report:
     params:
         seed=config["seed"],
         figures=report_figures(),
+        table1_trials=table1_trials(),
     script:
         "../scripts/report.py"

@@ -14,5 +14,6 @@ smk = snakemake  # noqa: F821 (injected by Snakemake)
 sys.stderr = open(smk.log[0], "w")
 paths = {key: smk.input[key] for key in INPUTS if key in smk.input.keys()}  # noqa: SIM118 (Namedlist: names via keys())
 with threadpool_limits(smk.threads):
-    build_report(paths, smk.params.figures, Path(smk.output.html).parent, seed=smk.params.seed)
+    build_report(paths, smk.params.figures, Path(smk.output.html).parent, seed=smk.params.seed,
+                 table1_trials=smk.params.table1_trials)
 print(f"report: {len(smk.params.figures)} figures from {sorted(paths)}", file=sys.stderr)

@@ -160,8 +160,8 @@ class AuthorsData:
     def cells(self, data):
         """Every stored value beside ours (``data``: our Measurements): likelihoods, then Table 1's and Fig 6's
         registration errors (the authors' EM's mixtures, scaled trials)."""
-        errors = data.errors(HEADLINE)
-        return self.likelihood_cells(data) + self.table1_cells(errors) + self.fig6_cells(errors)
+        return (self.likelihood_cells(data) + self.table1_cells(data.table1_errors(HEADLINE))
+                + self.fig6_cells(data.errors(HEADLINE)))
 
     def fig6_trials(self, errors):
         """``errors`` (ours) with each of Fig 6's methods scaled to its stored mean rotation and translation (None
@@ -252,8 +252,8 @@ def scaled(trials, mean):
 def authors_measurements(authors, data):
     """The authors' data as the claims read it, with ``data``'s (ours) noise: ``view -> StoredMeasurements`` for
     the views of :data:`VIEWS`."""
-    errors = data.errors(HEADLINE)
-    trials = {"figures": authors.fig6_trials(errors), "table1": authors.table1_trials(errors)}
+    trials = {"figures": authors.fig6_trials(data.errors(HEADLINE)),
+              "table1": authors.table1_trials(data.table1_errors(HEADLINE))}
     return {view: StoredMeasurements(likelihood=data.likelihood, all_fits=data.all_fits, max_iter=data.max_iter,
                                      authors=authors, view=view, trials=trials[view]) for view in VIEWS}
 

@@ -129,15 +129,25 @@ def registration_errors(rows, protocol="scaled", variant="textbook"):
     dict
         ``(model, mesh, method) -> {"rot": ndarray of shape (n_trials,), "trans": ndarray of shape (n_trials,)}``.
     """
-    groups = defaultdict(lambda: {name: [] for name in ERRORS})
+    groups = defaultdict(list)
     for row in rows:
         method = row["method"]
         own = method_variants(method, [variant])[0]
         if (row.get("protocol", "scaled") == protocol
                 and row.get("variant", method_variants(method, ["textbook"])[0]) == own):
-            for name, column in ERRORS.items():
-                groups[row["model"], row["mesh"], method][name].append(float(row[column]))
-    return {key: {name: np.array(values) for name, values in errors.items()} for key, errors in groups.items()}
+            groups[row["model"], row["mesh"], method].append(row)
+    return {key: {name: np.array([float(row[column]) for row in sorted(trials, key=lambda row: int(row["trial"]))])
+                  for name, column in ERRORS.items()} for key, trials in groups.items()}
+
+
+def table1_errors(errors, trials):
+    """``errors`` (:func:`registration_errors`) with the trials of each model's Table 1 mesh cut to its first
+    ``trials`` (by trial id): §VI-C's "average of 25 runs", as the authors' stored Table 1 (for the bunny, the first 25
+    of Fig 6's 250 on the same mesh). ``trials`` None keeps every trial."""
+    if errors is None or trials is None:
+        return errors
+    return {key: {name: values[:trials] for name, values in errors_of.items()} if key[1] == table1_mesh(key[0])
+            else errors_of for key, errors_of in errors.items()}
 
 
 def table1_mesh(model):

@@ -52,6 +52,7 @@ class Measurements:
     identities: list = None
     max_iter: int = tables.TEXT_MAX_ITER
     all_fits: list = field(default=None, repr=False)
+    table1_trials: int = None
 
     def __post_init__(self):
         if self.all_fits is None:
@@ -84,9 +85,14 @@ class Measurements:
         return None if self.registration is None else tables.registration_errors(self.registration, "scaled",
                                                                                  variant)
 
+    def table1_errors(self, variant):
+        """:meth:`errors` with Table 1's meshes cut to their first ``table1_trials`` trials
+        (:func:`~dgmm.experiments.report.tables.table1_errors`; None: every trial)."""
+        return tables.table1_errors(self.errors(variant), self.table1_trials)
+
     def table1(self, variant):
         """Table 1 (scaled trials) with mesh mixtures of ``variant``."""
-        return tables.table1(self.means, self.errors(variant), variant)
+        return tables.table1(self.means, self.table1_errors(variant), variant)
 
     def seconds(self, check):
         """``setting -> {repeat: CPU seconds}`` of one timing check of timing_seconds.csv ({} when missing)."""

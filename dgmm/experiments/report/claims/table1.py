@@ -40,7 +40,7 @@ def _likelihoods(data, variant):
 def _trials(data, variant):
     """``model -> {kind: {"rot": array, "trans": array}}`` over each model's trials, for ``TABLE1_METHODS``' kinds
     (points, mesh, mesh_c2f, reference), for the models with points, mesh and ICP trials."""
-    errors = data.errors(variant) or {}
+    errors = data.table1_errors(variant) or {}
     result = {}
     for model in paper.TABLE1:
         trials = {kind: errors.get((model, table1_mesh(model), method)) for kind, method in TABLE1_METHODS.items()}
