@@ -404,11 +404,11 @@ def _odometry(args):
         raise DataError(f"{args.sequence}: odometry needs at least 2 depth frames, got {n_frames}")
     frames, groundtruth = first_frames(sequence, n_frames, require_groundtruth=False)
     options = dict(intrinsics=intrinsics, variant=args.variant, seed=args.seed, schedule=args.schedule,
-                   warm_iter=args.warm_iter or None, protocol=args.protocol)
+                   warm_iter=args.warm_iter or None, protocol=args.protocol, size=args.pixel_size)
     params = {"dgmm_version": __version__, "sequence": sequence.name, "folder": str(args.sequence),
               "depth_topic": args.depth_topic, "method": args.method, "frames": n_frames, "intrinsics": camera,
               "variant": args.variant, "schedule": args.schedule, "warm_iter": args.warm_iter, "seed": args.seed,
-              "protocol": args.protocol}
+              "protocol": args.protocol, "pixel_size": args.pixel_size}
     with ExitStack() as stack:
         bar = stack.enter_context(_progress_bar(n_frames, desc="odometry", unit="frame"))
         recorder = None
@@ -431,7 +431,7 @@ def _odometry(args):
                              header=f"dgmm {args.method} odometry of {sequence.name}, intrinsics {camera}")
     seconds = float(result.prepare_seconds.mean() + result.registration_seconds.mean())
     print(json.dumps({"sequence": sequence.name, "method": args.method, "protocol": args.protocol,
-                      "variant": args.variant,
+                      "pixel_size": args.pixel_size, "variant": args.variant,
                       "intrinsics": camera, "frames": n_frames, **metrics, "seconds_per_frame": seconds,
                       "cpu_seconds_per_frame": float(result.cpu_seconds.mean())}))
 
@@ -465,6 +465,10 @@ def _odometry_arguments(parser):
                              "mixtures, D2D of the whole mixtures), common-view (both frames refitted on their common "
                              "view: robust under the fastest turns, 5x the CPU) or reference (k-means + 25 EM "
                              "iterations, BFGS) (default: %(default)s)")
+    parser.add_argument("--pixel-size", choices=("unit", "area"), default="unit",
+                        help="size of a pixel primitive in EM (gmm-pixels, protocol ours): unit (every pixel counts "
+                             "once; textbook and the authors' EM are then one algorithm) or area (its footprint, "
+                             "the sweep's: textbook EM then drifts more under fast turns) (default: %(default)s)")
     parser.add_argument("--protocol", choices=ODOMETRY_PROTOCOLS, default="ours",
                         help="ours: --schedule, --variant and pixel rectangles sized by their footprint; "
                              "authors-patch, authors-disparity: the authors' notebooks (gmm-pixels of size 1, flat "

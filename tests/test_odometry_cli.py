@@ -138,5 +138,35 @@ def test_unknown_schedule_is_one_line_exit_2_and_no_output(tmp_path):
     run = dgmm_odometry(folder, "--schedule", "fastest", "-o", tmp_path / "t.txt", "--rrd", tmp_path / "o.rrd")
     assert run.returncode == 2, run.stderr
     assert run.stdout == "" and run.stderr.count("\n") == 1
-    assert "schedule must be one of ['common-view', 'fast', 'overlap', 'reference']" in run.stderr
+    assert "schedule must be one of ['authors', 'common-view', 'fast', 'overlap', 'reference']" in run.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == [folder.name]
+
+
+@pytest.mark.slow  # a dgmm subprocess
+@needs_fr1
+def test_default_is_our_protocol_on_unit_pixels_and_protocols_reach_the_run(tmp_path):
+    """Without options `dgmm odometry` runs our protocol on pixels of size 1 (chosen by measurement: the odometry
+    user guide); --protocol runs the authors' one: each writes the library's trajectory for those settings."""
+    from dgmm.odometry import CAMERAS, read_sequence, run_odometry
+
+    sequence = read_sequence(FR1_XYZ)
+    for options, settings in (([], dict(size="unit")), (["--pixel-size", "area"], dict(size="area")),
+                              (["--protocol", "authors-disparity"], dict(protocol="authors-disparity"))):
+        output = tmp_path / "t.txt"
+        run = dgmm_odometry(FR1_XYZ, "--frames", 3, *options, "-o", output)
+        assert run.returncode == 0, run.stderr
+        result = json.loads(run.stdout)
+        assert (result["protocol"], result["pixel_size"]) == (settings.get("protocol", "ours"),
+                                                              settings.get("size", "unit"))
+        expected = run_odometry(sequence, "gmm-pixels", range(3), intrinsics=CAMERAS["ros"], **settings).trajectory
+        np.testing.assert_allclose(np.loadtxt(output, comments="#")[:, 1:4], expected.translations, atol=1e-8)
+
+
+@pytest.mark.slow  # a dgmm subprocess
+def test_authors_protocol_with_icp_is_one_line_exit_2(tmp_path):
+    folder = small_sequence(tmp_path / "rgbd_dataset_freiburg3_small")
+    run = dgmm_odometry(folder, "--method", "icp", "--protocol", "authors-patch", "-o", tmp_path / "t.txt")
+    assert run.returncode == 2, run.stderr
+    assert run.stdout == "" and run.stderr.count("\n") == 1
+    assert "protocol 'authors-patch' applies to gmm-pixels, not 'icp'" in run.stderr
     assert sorted(p.name for p in tmp_path.iterdir()) == [folder.name]

@@ -29,8 +29,8 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 import numpy as np  # noqa: E402
 from threadpoolctl import threadpool_limits  # noqa: E402
 
-from dgmm.odometry import (CAMERAS, drift_metrics, first_frames, frame_motions, read_sequence,  # noqa: E402
-                           run_odometry, sequence_intrinsics)
+from dgmm.odometry import (CAMERAS, drift_metrics, first_frames, frame_motions, groundtruth_at_frames,  # noqa: E402
+                           read_sequence, run_odometry, sequence_intrinsics)
 from dgmm.registration import rotation_distance_deg  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -53,7 +53,7 @@ def case_sequence(case, cache):
             from dgmm.odometry.synthetic import write_spun_sequence
 
             source = read_sequence(FR1_XYZ)
-            matched, _ = source.groundtruth_at_frames()  # the frames with a ground-truth pose
+            matched, _ = groundtruth_at_frames(source)  # the frames with a ground-truth pose
             write_spun_sequence(folder, source, matched[(matched >= start) & (matched < start + n)], rate, seed,
                                 CAMERAS["ros"])
         return read_sequence(folder), CAMERAS["ros"], None
@@ -90,7 +90,7 @@ def main():
     print("|---|---|---|---|---|---|---|---|")
     for case in args.cases:
         sequence, intrinsics, count = case_sequence(case, args.cache)
-        matched, truth_poses = sequence.groundtruth_at_frames()
+        matched, truth_poses = groundtruth_at_frames(sequence)
         frames = matched if count is None else first_frames(sequence, count)[0]  # fr1xyz: as the benchmarks run it
         rows = np.flatnonzero(np.isin(frames, matched))  # the run's frames with a ground-truth pose
         truth = frame_motions(truth_poses.subset(np.flatnonzero(np.isin(matched, frames))))
