@@ -22,7 +22,8 @@ A screened fit runs a compiled kernel in 3-D (:mod:`dgmm.compiled.e_step`) and n
 
 Read top to bottom: checks, moment features, E-step, M-step, initialisation, estimator (the EM variants are in
 :mod:`dgmm.variants`).
-Conventions follow ``sklearn.mixture.GaussianMixture`` (full covariances), and so does the estimator's contract
+Conventions follow ``sklearn.mixture.GaussianMixture`` (``covariance_type`` full, tied, diag, spherical: EM runs on
+(K, d, d) matrices, constrained in the M-step, :func:`_constrained`), and so does the estimator's contract
 (input validation, ``n_features_in_``, ``NotFittedError``): ``precisions_cholesky_`` is upper
 triangular ``U`` with precision ``U Uᵀ``; ``reg_covar`` on the diagonal, absolute, in the data's squared units;
 ``10 eps`` on component masses.
@@ -80,9 +81,11 @@ def _is_real(low):
     return lambda v: isinstance(v, numbers.Real) and not isinstance(v, bool) and np.isfinite(v) and v >= low
 
 
+COVARIANCE_TYPES = ("full", "tied", "diag", "spherical")
 # Hyperparameters, checked once at the public boundary: name -> (check, what it must be).
 _PARAMETERS = {
     "n_components": (_is_int(1), "an integer >= 1"),
+    "covariance_type": (lambda v: v in COVARIANCE_TYPES, f"one of {COVARIANCE_TYPES}"),
     "init": (lambda v: v in INITS, f"one of {INITS}"),
     "max_iter": (_is_int(1), "an integer >= 1"),
     "tol": (lambda v: v is None or _is_real(0)(v), "None or a finite number >= 0"),
@@ -433,9 +436,10 @@ def _m_step_sums(resp, moments, row_weights):
     return resp @ (moments * row_weights[:, None])
 
 
-def _m_step(sums, reg_covar):
+def _m_step(sums, reg_covar, covariance_type="full"):
     """Mixture parameters (weights, centred means, precision Choleskys, covariances) from the M-step sums
-    (:func:`_m_step_sums` added over all primitives)."""
+    (:func:`_m_step_sums` added over all primitives); covariances and Choleskys as (K, d, d) matrices whatever the
+    ``covariance_type`` (:func:`_constrained`)."""
     layout = _layout_of(sums.shape[1] + 1)
     d, rows, cols = layout.d, layout.rows, layout.cols
     mass = sums[:, layout.one] + _EPS
@@ -446,8 +450,57 @@ def _m_step(sums, reg_covar):
     second[:, rows, cols] = upper
     second[:, cols, rows] = upper
     covariances = second - means[:, :, None] * means[:, None, :]
+    if covariance_type != "full":
+        covariances = _constrained(covariances, mass, covariance_type)
     covariances[:, np.arange(d), np.arange(d)] += reg_covar
     return mass / mass.sum(), means, _precisions_cholesky(covariances), covariances
+
+
+def _constrained(scatters, mass, covariance_type):
+    """The M-step covariances of a ``covariance_type`` other than full, as (K, d, d) matrices, from each component's
+    full-covariance scatter ``S_i = Σ_p w_ip E_p[(x − mu_i)(x − mu_i)ᵀ] / W_i`` (before ``reg_covar``).
+
+    The bound's covariance terms are ``−½ W_i (log det C_i + tr(C_i⁻¹ S_i))``, and ``S_i = Σ_p w_ip (Sigma_p +
+    (mu_p − mu_i)(mu_p − mu_i)ᵀ) / W_i``. Their maximiser over diagonal ``C_i`` is ``diag(S_i)`` (a primitive's
+    covariance enters through its diagonal), over ``s_i I`` it is ``tr(S_i) / d`` (through its trace), and over one
+    ``C`` shared by all components ``Σ_i W_i S_i / Σ_i W_i`` (pooled). In the E-step the term ``−½ tr(C_i⁻¹
+    Sigma_p)`` of such a ``C_i`` likewise reads only the diagonal, the trace or all of ``Sigma_p``.
+    """
+    k, d = len(mass), scatters.shape[1]
+    if covariance_type == "tied":
+        return np.repeat((np.einsum("k,kij->ij", mass, scatters) / mass.sum())[None], k, axis=0)
+    variances = np.diagonal(scatters, axis1=1, axis2=2)
+    if covariance_type == "spherical":
+        variances = np.repeat(variances.mean(axis=1, keepdims=True), d, axis=1)
+    return variances[:, :, None] * np.eye(d)
+
+
+def _typed(matrices, covariance_type):
+    """(K, d, d) covariances or precision Choleskys in scikit-learn's shape of ``covariance_type``: (K, d, d),
+    (d, d) tied, (K, d) diagonal, (K,) spherical."""
+    if covariance_type == "tied":
+        return matrices[0]
+    if covariance_type == "diag":
+        return np.diagonal(matrices, axis1=1, axis2=2).copy()
+    if covariance_type == "spherical":
+        return matrices[:, 0, 0].copy()
+    return matrices
+
+
+def _full(values, covariance_type, k, d):
+    """:func:`_typed`'s inverse: (K, d, d) matrices from scikit-learn's shape of ``covariance_type``."""
+    if covariance_type == "tied":
+        return np.broadcast_to(values, (k, d, d))
+    if covariance_type == "diag":
+        return values[:, :, None] * np.eye(d)
+    if covariance_type == "spherical":
+        return values[:, None, None] * np.eye(d)
+    return values
+
+
+def _typed_shape(covariance_type, k, d):
+    """scikit-learn's shape of ``covariances_`` and ``precisions_init`` for ``covariance_type``."""
+    return {"full": (k, d, d), "tied": (d, d), "diag": (k, d), "spherical": (k,)}[covariance_type]
 
 
 def _precisions_cholesky(covariances):
@@ -516,7 +569,8 @@ def _one_line(exc):
 
 
 class GaussianMixture(DensityMixin, BaseEstimator):
-    """A full-covariance Gaussian mixture fitted by EM to points, triangles or any primitives, in any dimension.
+    """A Gaussian mixture (full, tied, diagonal or spherical covariances) fitted by EM to points, triangles or any
+    primitives, in any dimension.
 
     A scikit-learn estimator (its estimator checks pass): array input is validated by scikit-learn's
     ``validate_data`` (its messages, as :class:`dgmm.InputError`), ``n_features_in_`` is set by ``fit`` and checked
@@ -526,6 +580,12 @@ class GaussianMixture(DensityMixin, BaseEstimator):
     Parameters
     ----------
     n_components : int, default=1
+    covariance_type : {"full", "tied", "diag", "spherical"}, default="full"
+        As scikit-learn's: each component's own full covariance, one full covariance shared by all, diagonal, or
+        a multiple of the identity. The M-step takes the full scatter's diagonal, mean variance or
+        mass-weighted pool (:func:`_constrained`, where the bound's maximiser is derived), so a primitive's
+        covariance enters through its diagonal, trace or pooled form. ``covariances_``, ``precisions_cholesky_``
+        and ``precisions_init`` take scikit-learn's shapes: (K, d, d), (d, d), (K, d), (K,).
     init : {"kmeans", "random"}, default="kmeans"
         "kmeans": hard labels from k-means on the primitive means weighted by size; "random": uniform random
         soft responsibilities.
@@ -543,7 +603,9 @@ class GaussianMixture(DensityMixin, BaseEstimator):
         Seeds ``np.random.default_rng``; the same seed gives bit-identical fits.
     weights_init : array-like of shape (n_components,), optional
     means_init : array-like of shape (n_components, d), optional
-    precisions_init : array-like of shape (n_components, d, d), optional
+    precisions_init : array-like, optional
+        Of shape (n_components, d, d) for "full"; (d, d), (n_components, d), (n_components,) for "tied", "diag",
+        "spherical".
         User starting values; those given replace the ones ``init`` computes.
     variant : {"textbook", "authors"}, default="textbook"
         "textbook" is EM for the bound above. "authors" reproduces the authors' published fitting code
@@ -575,7 +637,9 @@ class GaussianMixture(DensityMixin, BaseEstimator):
     weights_ : ndarray of shape (n_components,)
     means_ : ndarray of shape (n_components, d)
     covariances_ : ndarray of shape (n_components, d, d)
+        Or (d, d), (n_components, d), (n_components,) for "tied", "diag", "spherical".
     precisions_cholesky_ : ndarray of shape (n_components, d, d)
+        Upper triangular ``U`` with precision ``U Uᵀ``; shaped as ``covariances_``.
     n_features_in_ : int
         The dimension ``d`` of the input.
     n_iter_ : int
@@ -586,15 +650,16 @@ class GaussianMixture(DensityMixin, BaseEstimator):
         The bound after each iteration (but the last when ``tol`` is None); ``history_[-1] == lower_bound_``
         when it is not empty.
     e_step_params_ : tuple of ndarray
-        ``(weights, means, covariances, precisions_cholesky)`` whose E-step gave the responsibilities of the last
+        ``(weights, means, covariances, precisions_cholesky)`` (the last two (K, d, d) matrices) whose E-step gave the responsibilities of the last
         M-step (the parameters before it): with ``dgmm.mixture.responsibilities`` they take a primitive's share out
         of that M-step exactly, as :mod:`dgmm.odometry.measured_cut` does.
     """
 
-    def __init__(self, n_components=1, *, init="kmeans", max_iter=25, tol=1e-12, reg_covar=1e-6,
-                 random_state=None, weights_init=None, means_init=None, precisions_init=None,
+    def __init__(self, n_components=1, *, covariance_type="full", init="kmeans", max_iter=25, tol=1e-12,
+                 reg_covar=1e-6, random_state=None, weights_init=None, means_init=None, precisions_init=None,
                  variant="textbook", callback=None, memory_limit=DEFAULT_MEMORY_LIMIT, n_jobs=None, screen=None):
         self.n_components = n_components
+        self.covariance_type = covariance_type
         self.init = init
         self.max_iter = max_iter
         self.tol = tol
@@ -651,7 +716,7 @@ class GaussianMixture(DensityMixin, BaseEstimator):
             resp = _INIT_RESP[self.init](prims.means / unit, mstep_weights, k, rng)
             sums = blocks.run(lambda rows, out: _m_step_sums(resp(rows, out), table[rows, :-1], mstep_weights[rows]),
                               threads=False)
-            weights, means, prec_chol, _ = _m_step(sums, self.reg_covar / unit**2)
+            weights, means, prec_chol, _ = _m_step(sums, self.reg_covar / unit**2, self.covariance_type)
         if self.weights_init is not None:
             weights = _check_array("weights_init", self.weights_init, (k,))
             if np.any(weights < 0) or not np.isclose(weights.sum(), 1.0):
@@ -659,7 +724,9 @@ class GaussianMixture(DensityMixin, BaseEstimator):
         if self.means_init is not None:
             means = (_check_array("means_init", self.means_init, (k, d)) - centre) / unit
         if self.precisions_init is not None:
-            precisions = _check_array("precisions_init", self.precisions_init, (k, d, d))
+            shape = _typed_shape(self.covariance_type, k, d)
+            precisions = _full(_check_array("precisions_init", self.precisions_init, shape), self.covariance_type,
+                               k, d)
             try:  # any factor with U Uᵀ = precision serves; scikit-learn takes the lower Cholesky here too
                 prec_chol = np.linalg.cholesky(precisions) * unit
             except np.linalg.LinAlgError:
@@ -683,8 +750,8 @@ class GaussianMixture(DensityMixin, BaseEstimator):
         weights, means, prec_chol, covariances = params
         self.weights_ = weights
         self.means_ = means * unit + centre
-        self.precisions_cholesky_ = prec_chol / unit
-        self.covariances_ = covariances * unit**2
+        self.precisions_cholesky_ = _typed(prec_chol, self.covariance_type) / unit
+        self.covariances_ = _typed(covariances, self.covariance_type) * unit**2
         if not all(np.all(np.isfinite(getattr(self, name))) for name in _FITTED):
             raise FitError("a fitted parameter is not finite in data units")
 
@@ -724,7 +791,7 @@ class GaussianMixture(DensityMixin, BaseEstimator):
                 scored = self.tol is not None or iteration < self.max_iter
                 e_step_params = params[:3]  # whose E-step gave ``sums``
                 try:
-                    params = _m_step(sums, reg_covar)
+                    params = _m_step(sums, reg_covar, self.covariance_type)
                     if scored:
                         sums, bound = _e_step(inputs, params[:3], blocks)
                         _check_bound(bound)
@@ -783,10 +850,15 @@ class GaussianMixture(DensityMixin, BaseEstimator):
         self._check_fitted()
         return self._primitives(X, reset=False)
 
+    def _full_parameters(self):
+        """The fitted (weights, means, covariances, precision Choleskys), the last two as (K, d, d) matrices."""
+        k, d = self.means_.shape
+        return (self.weights_, self.means_, _full(self.covariances_, self.covariance_type, k, d),
+                _full(self.precisions_cholesky_, self.covariance_type, k, d))
+
     def _log_rho_blocks(self, prims):
         """``log rho`` of the fitted mixture (textbook E-step), block by block over the primitives."""
-        return EStep(self.weights_, self.means_, self.covariances_,
-                     self.precisions_cholesky_).log_rho_blocks(prims.means, prims.covariances)
+        return EStep(*self._full_parameters()).log_rho_blocks(prims.means, prims.covariances)
 
     def _log_norm(self, prims):
         log_norm = np.concatenate([_log_normaliser(block) for block in self._log_rho_blocks(prims)])
@@ -837,8 +909,7 @@ class GaussianMixture(DensityMixin, BaseEstimator):
 
     def predict_proba(self, X):
         """Responsibilities ``eta`` of each component for each point or primitive, shape (n, n_components)."""
-        return responsibilities(self._checked(X), self.weights_, self.means_, self.covariances_,
-                                self.precisions_cholesky_)
+        return responsibilities(self._checked(X), *self._full_parameters())
 
     def sample(self, n_samples=1):
         """Draw ``n_samples`` points; returns (X of shape (n_samples, d), component labels)."""
@@ -847,6 +918,6 @@ class GaussianMixture(DensityMixin, BaseEstimator):
             raise InputError(f"n_samples={n_samples!r}: must be an integer >= 1")
         rng = np.random.default_rng(self.random_state)
         labels = np.sort(rng.choice(self.n_components, size=n_samples, p=self.weights_))
-        lower = np.linalg.cholesky(self.covariances_)
+        lower = np.linalg.cholesky(self._full_parameters()[2])
         noise = rng.standard_normal((n_samples, self.means_.shape[1]))
         return self.means_[labels] + np.einsum("nij,nj->ni", lower[labels], noise), labels
