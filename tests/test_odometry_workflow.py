@@ -250,3 +250,13 @@ def test_bad_config_value_names_the_key(tmp_path):
     run = run_snakemake(tmp_path, "-n", "odometry", configfile=write_config(tmp_path, frames=1), timeout=300)
     assert run.returncode != 0
     assert "frames" in run.stdout + run.stderr
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("key, value", [("protocols", ["ours", "authors"]), ("authors_frames", 1)])
+def test_bad_protocol_settings_name_the_key(tmp_path, key, value):
+    """An unknown protocol and a prefix of fewer than 3 frames stop the workflow before any job, naming the key."""
+    run = run_snakemake(tmp_path / "work", "-n", "odometry", configfile=write_config(tmp_path, **{key: value}),
+                        timeout=300)
+    assert run.returncode != 0
+    assert key in run.stdout + run.stderr
