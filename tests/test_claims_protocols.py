@@ -79,3 +79,13 @@ def test_every_fig4_claim_is_followed_by_its_100_iteration_grading_pending_witho
         assert evaluated[index].verdict == "pending" and "fig4_100" in evaluated[index].why
     quadric = titles.index("Quadric decimation fits better than clustering decimation")
     assert evaluated[quadric].verdict == "reproduced" and evaluated[quadric + 1].verdict == "pending"
+
+
+def test_the_odometry_claims_read_our_protocol_unless_told():
+    rows = [{"sequence": "s", "method": "gmm-pixels", "variant": "textbook", "protocol": protocol, "ate_rmse_m": ate}
+            for protocol, ate in (("ours", "0.04"), ("authors-patch", "0.05"))]
+    rows.append({"sequence": "s", "method": "icp", "variant": "", "protocol": "", "ate_rmse_m": "0.06"})
+    data = claims.Measurements(odometry=rows)
+    assert [row["ate_rmse_m"] for row in data.odometry] == ["0.04", "0.06"]
+    assert [row["ate_rmse_m"] for row in data.with_odometry_protocol("authors-patch").odometry] == ["0.05", "0.06"]
+    assert claims.Measurements(odometry=[{"sequence": "s", "method": "icp"}]).odometry  # no protocol column: ours

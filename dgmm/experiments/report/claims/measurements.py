@@ -29,13 +29,19 @@ TABLES = {
 }
 
 
+OURS = "ours"
+"""odometry.csv's protocol of our own per-frame schedule (config ``odometry.protocols``); a table without the column
+holds only ours. Rows with an empty protocol (ICP: no mixture) belong to every protocol."""
+
+
 @dataclass(frozen=True)
 class Measurements:
     """Rows of every table of ``TABLES`` (None: not configured), with the summaries several claims share.
 
     ``likelihood`` holds the rows of likelihood.csv's fits capped at ``max_iter`` iterations (the text's 25 unless
     :meth:`at_iterations` says otherwise); ``all_fits`` every row, whatever its cap (set from ``likelihood`` when not
-    given).
+    given). Likewise ``odometry`` holds odometry.csv's runs of ``odometry_protocol`` (ours unless said otherwise) and
+    ``all_odometry`` every run.
     """
 
     likelihood: list = None
@@ -53,18 +59,29 @@ class Measurements:
     max_iter: int = tables.TEXT_MAX_ITER
     all_fits: list = field(default=None, repr=False)
     table1_trials: int = None
+    odometry_protocol: str = OURS
+    all_odometry: list = field(default=None, repr=False)
 
     def __post_init__(self):
         if self.all_fits is None:
             object.__setattr__(self, "all_fits", self.likelihood)
         if self.all_fits is not None:
             object.__setattr__(self, "likelihood", tables.likelihood_rows(self.all_fits, self.max_iter))
+        if self.all_odometry is None:
+            object.__setattr__(self, "all_odometry", self.odometry)
+        if self.all_odometry is not None:
+            object.__setattr__(self, "odometry", [row for row in self.all_odometry
+                                                  if row.get("protocol", OURS) in ("", self.odometry_protocol)])
 
     def at_iterations(self, max_iter):
         """The same tables with ``likelihood`` (and ``means``, ``estimates``) the fits capped at ``max_iter``
         iterations: ``at_iterations(100)`` shows Fig 4 as the authors' stored data ran it (config experiment
         fig4_100; the other experiments have no such fits)."""
         return replace(self, max_iter=max_iter, likelihood=None)
+
+    def with_odometry_protocol(self, protocol):
+        """The same tables with ``odometry`` the runs of ``protocol`` (config ``odometry.protocols``)."""
+        return replace(self, odometry_protocol=protocol, odometry=None)
 
     @cached_property
     def means(self):
