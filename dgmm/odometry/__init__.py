@@ -10,6 +10,9 @@ The public namespace; one concept per module:
   written (imported on its own: mcap);
 - :mod:`~dgmm.odometry.depth_png`: fast decoding of TUM's 16-bit depth PNGs (ISA-L's inflate, PIL for the rest);
 - :mod:`~dgmm.odometry.pixels`: camera intrinsics, back-projection and pixel-rectangle primitives;
+- :mod:`~dgmm.odometry.pixel_covariance`: a pixel primitive's covariance, the flat patch or the authors' disparity box;
+- :mod:`~dgmm.odometry.protocols`: ours or the authors' per-frame protocol (pixel sizes, covariance, schedule);
+- :mod:`~dgmm.odometry.sklearn_em`: a frame's mixture fitted as scikit-learn's ``GaussianMixture`` at its defaults;
 - :mod:`~dgmm.odometry.frame_model`: each method's per-frame model (a GMM, or ICP's points), the per-frame
   schedules of the GMMs (EM start, EM iterations, D2D solver) and the registration of two frames;
 - :mod:`~dgmm.odometry.em_start`: a frame's EM start under a sampled schedule (k-means++ seeds, Lloyd iterations);
