@@ -30,6 +30,7 @@ def odometry_frames(wildcards):
         return ODO["frames"]
     return min(ODO["frames"], ODO["authors_frames"])
 
+
 ODO_JOB = f"{ODO_DIR}/{{sequence}}/{{run}}"
 
 
