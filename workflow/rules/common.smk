@@ -9,6 +9,7 @@ from snakemake.utils import validate
 from dgmm.data import REGISTRY
 from dgmm.odometry import odometry_runs
 from dgmm.odometry.pixels import sequence_intrinsics
+from dgmm.odometry.protocols import OURS, run_protocol
 from dgmm.experiments.report import figure_names
 from dgmm.experiments.sweep import parse_input, variants_for
 from dgmm.experiments.trials import METHODS, NO_VARIANT, PROTOCOLS, method_variants, mixture_source
@@ -316,6 +317,19 @@ def report_inputs():
         if PICTURE_BUDGET in DATA["budgets"]:
             inputs.update({method: f"{DATA_DIR}/bunny/{method}{PICTURE_BUDGET}.ply" for method in DATA["methods"]})
     return inputs
+
+
+def odometry_protocol(wildcards):
+    """The protocol of an odometry job's run ("ours", or one of the authors')."""
+    return run_protocol(wildcards.run)
+
+
+def odometry_frames(wildcards):
+    """First frames of an odometry job: odometry.frames, capped at odometry.authors_frames for the authors'
+    protocols (their per-frame EM runs to convergence: ~10x our CPU per frame)."""
+    if run_protocol(wildcards.run) == OURS:
+        return ODO["frames"]
+    return min(ODO["frames"], ODO["authors_frames"])
 
 
 def table1_trials():

@@ -15,22 +15,6 @@
 # and results/tables/odometry.csv (ATE, RPE), odometry_seconds.csv (mean timings), results/odometry/fig7.png.
 import re
 
-from dgmm.odometry.protocols import OURS, run_protocol
-
-
-def odometry_protocol(wildcards):
-    """The protocol of an odometry job's run ("ours", or one of the authors')."""
-    return run_protocol(wildcards.run)
-
-
-def odometry_frames(wildcards):
-    """First frames of an odometry job: odometry.frames, capped at odometry.authors_frames for the authors'
-    protocols (their per-frame EM runs to convergence: ~10x our CPU per frame)."""
-    if run_protocol(wildcards.run) == OURS:
-        return ODO["frames"]
-    return min(ODO["frames"], ODO["authors_frames"])
-
-
 ODO_JOB = f"{ODO_DIR}/{{sequence}}/{{run}}"
 
 
