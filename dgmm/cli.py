@@ -473,7 +473,8 @@ def _odometry_arguments(parser):
                         help="ours: --schedule, --variant and pixel rectangles sized by their footprint; "
                              "authors-patch, authors-disparity: the authors' notebooks (gmm-pixels of size 1, flat "
                              "patch or disparity-box covariance, scikit-learn GaussianMixture(100) defaults, BFGS "
-                             "D2D; ~10x the CPU per frame; --schedule and --variant unused) (default: %(default)s)")
+                             "D2D; ~10x the CPU per frame; --schedule and --variant unused; authors-patch also runs "
+                             "gmm-points so) (default: %(default)s)")
     parser.add_argument("--warm-iter", type=_seed, default=0, metavar="N",
                         help="EM iterations of every frame after the first, started from the previous frame's "
                              "mixture; 0 fits every frame by its schedule (default: %(default)s; a warm start "

@@ -175,3 +175,59 @@ def test_the_ate_seed_spread_is_the_one_the_seed_study_measured():
     assert [len(run) for run in runs] == [5, 5]
     squares = sum(((run / run.mean() - 1) ** 2).sum() for run in runs)
     assert round(float(np.sqrt(squares / 8)), 3) == odometry.ATE_SEED_SPREAD
+
+
+def test_the_ate_claim_is_graded_again_on_the_authors_protocol():
+    # Ours (798 frames): fr1 pixels 0.050 against points 0.040, band 2·√((0.114·0.05)² + (0.114·0.04)²) = 0.0146 >
+    # 0.010: tied. The authors' protocol (100 frames; one run serves both EMs), one seed: fr1 pixels 0.015 against
+    # points 0.066, band 2·0.625·√(0.015² + 0.066²) = 0.0846 > 0.051: tied; synthetic 0.0011 against 0.0011: tied.
+    # All tied -> not reproduced. ICP's 798-frame run is not set beside the authors' 100 frames.
+    assert odometry.AUTHORS_ATE_SEED_SPREAD == 0.625
+    row = {"variant": "authors", "schedule": "authors", "frames": "100", "protocol": "authors-patch",
+           "missing_folder": ""}
+    ates = {("fr1", "gmm-pixels"): [0.015], ("fr1", "gmm-points"): [0.066], ("synthetic", "gmm-pixels"): [0.0011],
+            ("synthetic", "gmm-points"): [0.0011]}
+
+    def authors_rows(ates, seeds=False):
+        return [{**row, "sequence": sequence, "method": method, "ate_rmse_m": str(ate),
+                 **({"seed": str(seed)} if seeds else {})}
+                for (sequence, method), values in ates.items() for seed, ate in enumerate(values)]
+
+    ours = [{**row, "protocol": "ours", "schedule": "overlap", "frames": "798"}
+            for row in odometry_rows({("fr1", "gmm-pixels"): [0.05], ("fr1", "gmm-points"): [0.04]})]
+    icp = {"sequence": "fr1", "method": "icp", "variant": "", "schedule": "", "frames": "798", "protocol": "",
+           "ate_rmse_m": "0.07", "missing_folder": ""}
+    data = Measurements(odometry=[*ours, icp, *authors_rows(ates)])
+    base, twin = odometry.CLAIMS[:2]
+    assert twin.__wrapped__ is base is odometry.pixels_beat_points
+    claim = base(data)
+    assert verdicts(claim) == {"authors": "not reproduced", "textbook": "not reproduced"}
+    assert "icp 0.070 m" in claim.evidence and "0.015" not in claim.evidence
+    claim = twin(data)
+    assert claim.title.endswith("(the authors' per-frame protocol, authors-patch)")
+    assert verdicts(claim) == {"authors": "not reproduced", "textbook": "not reproduced"}
+    assert claim.grades["authors"].ours == "0/2 won, 2 tied"
+    assert "icp" not in claim.evidence and "first 100 frames" in claim.evidence
+    assert "a run's error 62.5% of its ATE" in claim.evidence
+    # Two seeds each, their standard error from the seeds: fr1 pixels 0.0150, 0.0152 (0.0151 ± 0.0001) against points
+    # 0.0200, 0.0202: band 2·√2·0.0001 = 0.00028 < 0.0049: won; synthetic tied (band 0, difference 0). Plain: 1 won,
+    # 1 tied -> reproduced.
+    seeded = {**ates, ("fr1", "gmm-pixels"): [0.0150, 0.0152], ("fr1", "gmm-points"): [0.0200, 0.0202],
+              ("synthetic", "gmm-pixels"): [0.0011] * 2, ("synthetic", "gmm-points"): [0.0011] * 2}
+    claim = twin(Measurements(odometry=authors_rows(seeded, seeds=True)))
+    assert verdicts(claim) == {"authors": "reproduced", "textbook": "reproduced"}
+    waiting = twin(Measurements(odometry=[*ours, icp]))
+    assert waiting.verdict == "pending" and "odometry.protocols" in waiting.why
+
+
+def test_the_authors_seed_spread_is_the_one_their_seed_table_shows():
+    # AUTHORS_ATE_SEED_SPREAD is the pooled relative standard deviation of the authors-patch and authors-points seed
+    # table in docs/benchmarks/odometry.md, recomputed from the ATEs printed there (5 + 5 - 2 = 8 degrees of freedom).
+    text = (Path(__file__).parents[1] / "docs/benchmarks/odometry.md").read_text()
+    table = text[text.index("| run | ATE (m), seeds 0-4 | CPU s / frame |"):].split("\n\n")[0]
+    runs = [np.array([float(v) for v in next(line for line in table.splitlines()
+                                             if line.startswith(f"| {run} |")).split("|")[2].split(",")])
+            for run in ("authors-patch", "authors-points")]
+    assert [len(run) for run in runs] == [5, 5]
+    squares = sum(((run / run.mean() - 1) ** 2).sum() for run in runs)
+    assert round(float(np.sqrt(squares / 8)), 3) == odometry.AUTHORS_ATE_SEED_SPREAD

@@ -168,5 +168,5 @@ def test_authors_protocol_with_icp_is_one_line_exit_2(tmp_path):
     run = dgmm_odometry(folder, "--method", "icp", "--protocol", "authors-patch", "-o", tmp_path / "t.txt")
     assert run.returncode == 2, run.stderr
     assert run.stdout == "" and run.stderr.count("\n") == 1
-    assert "protocol 'authors-patch' applies to gmm-pixels, not 'icp'" in run.stderr
+    assert "protocol 'authors-patch' applies to gmm-pixels, gmm-points, not 'icp'" in run.stderr
     assert sorted(p.name for p in tmp_path.iterdir()) == [folder.name]

@@ -145,10 +145,11 @@ def test_runs_and_their_protocols():
     assert runs == {"gmm-pixels-textbook": ("gmm-pixels", "textbook"), "gmm-pixels-authors": ("gmm-pixels", "authors"),
                     "gmm-points-textbook": ("gmm-points", "textbook"), "icp": ("icp", ""),
                     "gmm-pixels-authors-patch": ("gmm-pixels", "authors"),
+                    "gmm-points-authors-patch": ("gmm-points", "authors"),
                     "gmm-pixels-authors-disparity": ("gmm-pixels", "authors")}
-    assert [run_protocol(run) for run in runs] == ["ours"] * 4 + ["authors-patch", "authors-disparity"]
+    assert [run_protocol(run) for run in runs] == ["ours"] * 4 + ["authors-patch"] * 2 + ["authors-disparity"]
     assert odometry_runs(["gmm-pixels"], ["textbook"]) == {"gmm-pixels-textbook": ("gmm-pixels", "textbook")}
-    assert protocol_runs(["authors-patch"], ["icp", "gmm-points"]) == {}
+    assert protocol_runs(["authors-disparity"], ["icp", "gmm-points"]) == {}
     with pytest.raises(InputError, match="^protocols must be one of ours, authors-patch, authors-disparity"):
         odometry_runs(["gmm-pixels"], ["textbook"], ["authors"])
 
@@ -157,14 +158,15 @@ def test_authors_schedule_and_protocols():
     schedule = SCHEDULES["authors"]
     assert (schedule.seed_sample, schedule.em_iter, schedule.em_tol, schedule.solver) == (None, 100, 1e-3, "bfgs")
     assert not (schedule.overlap_rounds or schedule.cut_rounds or schedule.overlap_refits)
-    assert {name: (p.schedule, p.size, p.covariance) for name, p in PROTOCOLS.items() if p} == {
-        "authors-patch": ("authors", "unit", "patch"), "authors-disparity": ("authors", "unit", "disparity")}
+    assert {name: (p.schedule, p.size, p.covariance, p.methods) for name, p in PROTOCOLS.items() if p} == {
+        "authors-patch": ("authors", "unit", "patch", ("gmm-pixels", "gmm-points")),
+        "authors-disparity": ("authors", "unit", "disparity", ("gmm-pixels",))}
 
 
 def test_bad_protocol_is_one_line(tmp_path):
     with pytest.raises(InputError, match="^protocol must be one of ours, authors-patch, authors-disparity, got 'x'$"):
         run_odometry(None, "gmm-pixels", protocol="x")
-    with pytest.raises(InputError, match="^protocol 'authors-patch' applies to gmm-pixels, not 'icp'$"):
+    with pytest.raises(InputError, match="^protocol 'authors-patch' applies to gmm-pixels, gmm-points, not 'icp'$"):
         run_odometry(None, "icp", protocol="authors-patch")
 
 

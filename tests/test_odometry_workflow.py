@@ -24,8 +24,10 @@ RUNS = {"gmm-pixels-textbook": ("gmm-pixels", "textbook"), "gmm-points-textbook"
         "icp": ("icp", "")}
 METHODS = list(RUNS)  # job folders
 N_FRAMES = TEST_CONFIG["odometry"]["frames"]
-PROTOCOL_RUNS = {"gmm-pixels-authors-patch": "authors-patch", "gmm-pixels-authors-disparity": "authors-disparity"}
-"""tests/config.yaml's authors' protocols: gmm-pixels runs over the first authors_frames frames."""
+PROTOCOL_RUNS = {"gmm-pixels-authors-patch": "authors-patch", "gmm-points-authors-patch": "authors-patch",
+                 "gmm-pixels-authors-disparity": "authors-disparity"}
+"""tests/config.yaml's authors' protocols: gmm-pixels runs (and gmm-points under authors-patch) over the first
+authors_frames frames."""
 AUTHORS_FRAMES = TEST_CONFIG["odometry"]["authors_frames"]
 MISSING = TEST_CONFIG["odometry"]["sequences"][0]
 
@@ -93,8 +95,8 @@ def test_table_has_every_run_with_finite_metrics_and_the_missing_sequence(stage)
     assert [row["schedule"] for row in rows] == ["overlap", "overlap", ""]  # tests/config.yaml's; ICP has none
     assert [row["protocol"] for row in rows] == ["ours", "ours", ""]
     assert [(row["method"], row["variant"], row["schedule"], row["protocol"], int(row["frames"]))
-            for row in authors] == [("gmm-pixels", "authors", "authors", protocol, AUTHORS_FRAMES)
-                                    for protocol in PROTOCOL_RUNS.values()]
+            for row in authors] == [(run.removesuffix(f"-{protocol}"), "authors", "authors", protocol, AUTHORS_FRAMES)
+                                    for run, protocol in PROTOCOL_RUNS.items()]
     for row in authors:
         assert math.isfinite(float(row["ate_rmse_m"])) and row["missing_folder"] == ""
     for row in rows:
@@ -108,7 +110,7 @@ def test_table_has_every_run_with_finite_metrics_and_the_missing_sequence(stage)
     seconds = read_csv(stage / "tables" / "odometry_seconds.csv")
     assert [(row["method"], row["variant"], row["protocol"]) for row in seconds] == [
         *((method, variant, "ours" if variant else "") for method, variant in RUNS.values()),
-        *(("gmm-pixels", "authors", protocol) for protocol in PROTOCOL_RUNS.values())]
+        *((run.removesuffix(f"-{protocol}"), "authors", protocol) for run, protocol in PROTOCOL_RUNS.items())]
     for run in PROTOCOL_RUNS:
         assert len(tum_rows(stage / "odometry" / "synthetic" / run / "trajectory.txt")) == AUTHORS_FRAMES
         assert len(read_csv(stage / "odometry" / "synthetic" / run / "seconds.csv")) == AUTHORS_FRAMES

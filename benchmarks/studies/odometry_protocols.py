@@ -4,8 +4,10 @@ frame prefix, on fr1/xyz, the synthetic room and the rotation cases.
 Runs (``--runs``): ``ours:EM:SIZE`` (the sweep's ``overlap`` schedule, textbook or authors EM, pixel size area or
 unit, flat patch covariances) and the authors' protocols ``authors-patch``, ``authors-disparity``
 (:mod:`dgmm.odometry.protocols`: sizes of 1, the notebooks' covariance, scikit-learn's ``GaussianMixture(100)`` at its
-defaults, BFGS D2D from the identity; one EM, both variants being one algorithm on sizes of 1). Every run is
-``gmm-pixels`` over the same frames, frame to frame from the identity, one thread, each seed of ``--seeds``.
+defaults, BFGS D2D from the identity; one EM, both variants being one algorithm on sizes of 1), and
+``authors-points``, the plain points fitted and registered as ``authors-patch`` fits its pixels (``gen_gmm.ipynb``).
+Every run is ``gmm-pixels`` (``gmm-points`` for ``authors-points``) over the same frames, frame to frame from the
+identity, one thread, each seed of ``--seeds``.
 
 Cases (``--cases``): ``odometry_rotation_drift.py``'s (``fr1xyz:N``, ``spun:START:N:RATE:SEED``, ``room:SEED:N``:
 rotation only), and ``synthetic:SEED:N``, the synthetic room on its hand-held path (``write_synthetic_sequence``'s
@@ -61,11 +63,13 @@ def sequence_of(case, cache):
 
 
 def run_options(run):
-    """``run_odometry``'s keywords of a run spec."""
+    """``run_odometry``'s method and keywords of a run spec."""
     if run.startswith("ours"):
         _, variant, size = run.split(":")
-        return dict(protocol="ours", schedule="overlap", variant=variant, size=size)
-    return dict(protocol=run, variant="authors")
+        return "gmm-pixels", dict(protocol="ours", schedule="overlap", variant=variant, size=size)
+    if run == "authors-points":
+        return "gmm-points", dict(protocol="authors-patch", variant="authors")
+    return "gmm-pixels", dict(protocol=run, variant="authors")
 
 
 def main():
@@ -91,9 +95,9 @@ def main():
         ates = {}
         for run in args.runs:
             for seed in args.seeds:
+                method, options = run_options(run)
                 with threadpool_limits(1):
-                    result = run_odometry(sequence, "gmm-pixels", frames, intrinsics=intrinsics, seed=seed,
-                                          **run_options(run))
+                    result = run_odometry(sequence, method, frames, intrinsics=intrinsics, seed=seed, **options)
                 trajectory = result.trajectory
                 errors = frame_errors(frame_motions(trajectory.subset(rows)), truth)
                 metrics = drift_metrics(trajectory, sequence.groundtruth)

@@ -121,8 +121,8 @@ def run_odometry(sequence, method, frames=None, *, intrinsics=FR3, n_components=
         Pixel primitive covariance for ``"gmm-pixels"`` (``dgmm.odometry.pixel_covariance``).
     protocol : str, default="ours"
         A key of ``dgmm.odometry.protocols.PROTOCOLS``: ``"ours"`` runs with the arguments above; an authors'
-        protocol (``"authors-patch"``, ``"authors-disparity"``; ``"gmm-pixels"`` only) replaces ``schedule``,
-        ``size`` and ``covariance`` with its own (``variant`` is one algorithm on its unit sizes).
+        protocol (``"authors-patch"``: gmm-pixels and gmm-points; ``"authors-disparity"``: gmm-pixels) replaces
+        ``schedule``, ``size`` and ``covariance`` with its own (``variant`` is one algorithm on its unit sizes).
     n_icp_points : int
         Points drawn per frame for ``"icp"`` (paper: 2,500).
     icp_tol : float

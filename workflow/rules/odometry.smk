@@ -4,7 +4,8 @@
 # (sequence, run): a run is a GMM method with an EM variant (gmm-pixels-textbook, gmm-pixels-authors; the plain-point
 # GMM runs textbook EM only, the same algorithm as the authors' on unit sizes: gmm-points-textbook) or icp, under
 # protocol "ours" (odometry.schedule, odometry.pixel_size), and gmm-pixels under each of the authors' protocols in
-# odometry.protocols (gmm-pixels-authors-patch, gmm-pixels-authors-disparity: dgmm.odometry.protocols) over the first
+# odometry.protocols (gmm-pixels-authors-patch, gmm-points-authors-patch, gmm-pixels-authors-disparity:
+# dgmm.odometry.protocols) over the first
 # min(frames, authors_frames) frames. ate.csv's `protocol` column says which protocol a row ran ("" for icp).
 # Under results/odometry/{sequence}/{run}/ ({sequence}: the folder's name, a recording's file stem, or "synthetic"):
 #   trajectory.txt   the estimated trajectory, TUM format (camera -> first camera)
