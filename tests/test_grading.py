@@ -5,10 +5,11 @@ import numpy as np
 import pytest
 from scipy.stats import binom
 
-from dgmm.experiments.report.claims.grading import (EVERY, LOSS, NOT, OFTEN_WORDS, PARTLY, PLAIN, REPRODUCED, TIE,
-                                                    TIMING_NOISE, WIN, Estimate, Tally, TimeRatio, bootstrap, compare,
-                                                    estimate, grade_share, grade_time, magnitude, median_interval,
-                                                    paired_difference, versus_paper, within)
+from dgmm.experiments.report.claims.grading import (EVERY, INCONCLUSIVE, LOSS, NOT, OFTEN_WORDS, PARTLY, PLAIN,
+                                                    REPRODUCED, TIE, TIMING_NOISE, WIN, Estimate, Tally, TimeRatio,
+                                                    bootstrap, compare, estimate, grade_share, grade_time, magnitude,
+                                                    median_interval, paired_difference, same_protocol_error,
+                                                    versus_paper, within)
 
 
 def outcomes(wins, ties, losses):
@@ -19,17 +20,35 @@ def outcomes(wins, ties, losses):
 
 
 def test_a_comparison_inside_its_band_is_a_tie_whichever_way_it_leans():
-    difference = Estimate(7.28, 0.02) - Estimate(7.29, 0.02)  # 0.01 below, band 2·√(0.02²+0.02²) = 0.057
+    difference = Estimate(7.28, 0.02) - Estimate(7.29, 0.02)  # 0.01 below, band 1.96·√(0.02²+0.02²) = 0.055
     assert math.isclose(difference.error, math.hypot(0.02, 0.02))
     assert compare("a", difference).outcome == TIE
-    assert compare("a", Estimate(0.06, 0.02)).outcome == WIN  # 0.06 > 2 × 0.02
+    assert compare("a", Estimate(0.06, 0.02)).outcome == WIN  # 0.06 > 1.96 × 0.02 (a bootstrap: unbounded dof)
     assert compare("a", Estimate(0.06, 0.02), higher=False).outcome == LOSS
-    assert compare("a", Estimate(0.04, 0.02)).outcome == TIE  # 0.04 ≤ 0.04: on the edge is still a tie
+    assert compare("a", Estimate(0.0391, 0.02)).outcome == TIE  # 0.0391 ≤ 1.95996 × 0.02 = 0.03920: a tie
+
+
+def test_the_band_is_students_t_on_the_differences_degrees_of_freedom():
+    # Three seeds each (2 degrees of freedom): t(0.975, 2) = 4.303; the difference of two such means with equal
+    # errors has Welch-Satterthwaite's (2e²)² / (2e⁴/2) = 4 degrees of freedom: t = 2.776.
+    three = Estimate(1.0, 0.1, 2)
+    assert math.isclose(three.band, 0.4303, abs_tol=1e-4)
+    difference = three - Estimate(0.5, 0.1, 2)
+    assert math.isclose(difference.dof, 4.0)
+    assert math.isclose(difference.band, 2.776 * math.hypot(0.1, 0.1), rel_tol=1e-3)
+    # 0.35 apart is a win at 1.96 (band 0.277) and a tie at t(4) (band 0.393).
+    assert compare("a", Estimate(1.0, 0.1) - Estimate(0.65, 0.1)).outcome == WIN
+    assert compare("a", three - Estimate(0.65, 0.1, 2)).outcome == TIE
+    # Unequal errors: Welch-Satterthwaite weighs the larger error's dof: (0.1² + 0.01²)² / (0.1⁴/2 + 0.01⁴/9) ≈ 2.04.
+    welch = (0.1 ** 2 + 0.01 ** 2) ** 2 / (0.1 ** 4 / 2 + 0.01 ** 4 / 9)
+    assert math.isclose((three - Estimate(0.0, 0.01, 9)).dof, welch)
+    # estimate(): n − 1 degrees of freedom
+    assert estimate([1.0, 2.0, 4.0]).dof == 2
 
 
 def test_estimate_is_the_mean_with_the_standard_error():
     values = [1.0, 2.0, 4.0]
-    assert estimate(values) == Estimate(7 / 3, float(np.std(values, ddof=1)) / math.sqrt(3))
+    assert estimate(values) == Estimate(7 / 3, float(np.std(values, ddof=1)) / math.sqrt(3), 2)
     assert estimate([5.0]).error == 0.0
 
 
@@ -37,10 +56,27 @@ def test_ties_count_neither_way():
     assert Tally(tuple(outcomes(3, 5, 0))).counts == (3, 5, 0)
     assert grade_share(outcomes(5, 3, 0), PLAIN).verdict == REPRODUCED  # the ties are no loss
     assert grade_share(outcomes(5, 3, 1), PLAIN).verdict == NOT  # 5 of 6 untied: 83% < 90%; P(X ≥ 5 | 6) = 0.11
-    assert grade_share(outcomes(3, 5, 0), PLAIN).verdict == PARTLY  # mostly undecided: fewer wins than ties
-    assert grade_share(outcomes(3, 5, 0), EVERY).verdict == PARTLY  # a universal claim needs every case shown
+    assert grade_share(outcomes(3, 5, 0), PLAIN).verdict == INCONCLUSIVE  # mostly undecided: fewer untied than ties
     assert grade_share(outcomes(8, 0, 0), EVERY).verdict == REPRODUCED
-    assert grade_share(outcomes(0, 4, 0), EVERY).verdict == NOT  # nothing shown beyond noise
+    assert grade_share(outcomes(0, 4, 0), EVERY).verdict == INCONCLUSIVE  # nothing shown beyond noise either way
+    assert grade_share(outcomes(0, 4, 0), PLAIN).verdict == INCONCLUSIVE
+    assert grade_share(outcomes(0, 4, 0), OFTEN_WORDS).verdict == INCONCLUSIVE
+
+
+def test_a_never_claim_with_ties_is_reproduced_when_the_data_can_tell_it():
+    # "Exact never prefers random": 6 won, 4 tied, 0 lost. Ties count neither way; the untied (6) are no fewer than
+    # the ties (4), and none is lost: reproduced (it used to be "partly": a tie demoted a universal claim).
+    grade = grade_share(outcomes(6, 4, 0), EVERY)
+    assert (grade.verdict, grade.ours) == (REPRODUCED, "6/10 won, 4 tied")
+    # 3 won, 5 tied: what is untied bears it out, but most comparisons cannot tell: inconclusive, saying so.
+    grade = grade_share(outcomes(3, 5, 0), EVERY, "a cause")
+    assert grade.verdict == INCONCLUSIVE
+    assert grade.why == ("The data cannot tell: 5 of 8 comparisons lie inside their noise; the untied ones bear the "
+                         "claim out.")
+    assert grade_share(outcomes(0, 3, 0), EVERY).why == ("The data cannot tell: all 3 comparisons lie inside their "
+                                                          "noise.")
+    # one loss among ties: the claim's share fails on what is untied; not beyond chance -> not reproduced
+    assert grade_share(outcomes(0, 5, 1), EVERY).verdict == NOT
 
 
 def test_a_universal_claim_fails_on_one_loss_unless_the_rest_is_beyond_chance():
@@ -83,9 +119,27 @@ def test_a_cause_is_kept_only_when_not_reproduced():
 def test_equivalence_within_a_margin():
     assert within("x", 8.64, 8.62, 0.03).outcome == WIN
     assert within("x", 8.66, 8.62, 0.03).outcome == LOSS
-    # against a paper value printed to 2 decimals: 2·√2 × 0.005 + 0.005 = 0.0191
+    # against a paper value printed to 2 decimals, the paper's error taken as ours (unbounded dof):
+    # 1.96·√2 × 0.005 + 0.005 = 0.0189
     assert versus_paper("K=400", Estimate(8.635, 0.005), 8.62, 2).outcome == WIN
     assert versus_paper("K=400", Estimate(8.645, 0.005), 8.62, 2).outcome == LOSS
+    # ten seeds (9 dof each, 18 for the difference): t = 2.101, margin 2.101·√2 × 0.005 + 0.005 = 0.01986
+    assert versus_paper("K=400", Estimate(8.6395, 0.005, 9), 8.62, 2).outcome == WIN
+    assert versus_paper("K=400", Estimate(8.6405, 0.005, 9), 8.62, 2).outcome == LOSS
+
+
+def test_unequal_standard_errors_against_the_paper():
+    # The paper averaged 25 trials where we average 250: its mean's error is √10 times ours. Ours 10.0 ± 0.1 against
+    # a printed 10.6: with the paper's error taken as ours the margin is 1.96·√2·0.1 + 0.05 = 0.327 < 0.6: lost; with
+    # its own, 1.96·√(0.1² + 0.316²) + 0.05 = 0.700 > 0.6: won.
+    ours = Estimate(10.0, 0.1)
+    paper_error = same_protocol_error(ours, 250, 25)
+    assert math.isclose(paper_error.error, 0.1 * math.sqrt(10))
+    assert versus_paper("x", ours, 10.6, 1).outcome == LOSS
+    assert versus_paper("x", ours, 10.6, 1, paper_error=paper_error).outcome == WIN
+    # a verbal value ("about three") has no error: only ours and the rounding, 1.96·0.1 + 0.5 = 0.696
+    assert versus_paper("x", Estimate(3.69, 0.1), 3, 0, paper_error=Estimate(0.0)).outcome == WIN
+    assert versus_paper("x", Estimate(3.70, 0.1), 3, 0, paper_error=Estimate(0.0)).outcome == LOSS
 
 
 def test_paired_difference_over_trials():

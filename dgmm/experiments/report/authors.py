@@ -6,8 +6,8 @@ Two judgements, each defined once here:
 - **Reproduction of a cell** (:class:`Cell`): our mean against the authors' stored value of the same cell (same
   input, start, K; their EM for meshes, textbook EM for points, which is the same algorithm). The notebooks store no
   spread, so the authors' mean is taken to have our seeds' standard error (the same protocol); the cell reproduces
-  when the difference is inside the tie band of two such means, :data:`~.claims.grading.BAND_ERRORS` × √2 standard
-  errors, plus half the last printed digit of the stored value.
+  when the difference is inside the tie band of two such means (:func:`~.claims.grading.versus_paper`'s: Student's
+  t times √2 standard errors), plus half the last printed digit of the stored value.
 - **The paper's statement on the authors' data** (:func:`authors_measurements`): the claims whose rules read only
   means are graded again on the authors' stored means with our noise: each likelihood cell's mean replaced by
   theirs with our standard error, each registration method's trials scaled to their stored mean (Fig 6: the mean
@@ -20,7 +20,7 @@ from functools import cached_property
 
 import numpy as np
 
-from dgmm.experiments.report.claims.grading import BAND_ERRORS, Estimate, bootstrap
+from dgmm.experiments.report.claims.grading import Estimate, bootstrap
 from dgmm.experiments.report.claims.measurements import Measurements
 from dgmm.experiments.report.claims.rules import FIG3_MODEL, fitted_variant
 from dgmm.experiments.report.tables import (STORED_MAX_ITER, TABLE1_FIT, TABLE1_INPUTS, TABLE1_METHODS, TEXT_MAX_ITER,
@@ -76,7 +76,7 @@ class Cell:
         if self.ours is None:
             return math.nan
         decimals = len(self.printed.partition(".")[2]) if "e" not in self.printed.lower() else 15
-        return BAND_ERRORS * math.sqrt(2.0) * self.ours.error + 0.5 * 10.0 ** -decimals
+        return (self.ours - Estimate(0.0, self.ours.error, self.ours.dof)).band + 0.5 * 10.0 ** -decimals
 
     @property
     def reproduced(self):

@@ -19,9 +19,10 @@ table.summary{font-size:.8rem;line-height:1.25}table.summary td{vertical-align:t
 table.summary td,table.summary th{text-align:left}
 .badge{display:inline-block;padding:.1rem .45rem;border-radius:.7rem;color:#fff;font-weight:bold;white-space:nowrap}
 .reproduced{background:#1a7f37}.partly{background:#bf8700}.not-reproduced{background:#cf222e}
-.pending{background:#6e7781}.within-timing-noise{background:#8250df}"""
+.pending{background:#6e7781}.within-timing-noise{background:#8250df}.inconclusive{background:#0969da}"""
 
-BADGE_MARKS = {"reproduced": "🟢", "partly": "🟡", "not reproduced": "🔴", "within timing noise": "🟣", "pending": "⚪"}
+BADGE_MARKS = {"reproduced": "🟢", "partly": "🟡", "not reproduced": "🔴", "inconclusive": "🔵",
+               "within timing noise": "🟣", "pending": "⚪"}
 """Verdict -> the coloured mark beside its badge in Markdown (HTML colours it with CSS)."""
 
 _LINK = re.compile(r"\[([^\]]+)\]\(#([\w-]+)\)")

@@ -13,7 +13,8 @@ from dgmm.experiments.report.claims.rules import NOTEBOOK, TEXT, WORDS, first_se
 from dgmm.experiments.report.document import BADGE_MARKS
 
 
-VERDICT_ORDER = (grading.REPRODUCED, grading.PARTLY, grading.NOT, grading.TIMING_NOISE, grading.PENDING)
+VERDICT_ORDER = (grading.REPRODUCED, grading.PARTLY, grading.NOT, grading.INCONCLUSIVE, grading.TIMING_NOISE,
+                 grading.PENDING)
 SOURCE_MARKS = {NOTEBOOK: "ᴺ", TEXT: "", WORDS: ""}
 """Mark of a paper value by where it comes from (:data:`~.claims.rules.NOTEBOOK`: not in the paper's text)."""
 TIMING_START, TIMING_END = "<!-- timings: the only part that changes from run to run -->", "<!-- /timings -->"
@@ -127,7 +128,8 @@ def grading_rules():
     """The rule kinds, verdicts and value sources, defined once for every claim."""
     kinds = [f"**{kind}**: {text}." for kind, text in grading.RULE_KINDS.items()]
     return kinds + [
-        f"**verdicts**: {', '.join(VERDICT_ORDER)} (a table the claim needs is missing). Not reproduced names its "
+        f"**verdicts**: {', '.join(VERDICT_ORDER)} (a table the claim needs is missing); inconclusive and within "
+        "timing noise are no verdict: the data cannot tell, a rerun could tell it either way. Not reproduced names its "
         "measured cause (an experiment that switches it and moves the verdict) or \"cause not found\" and what was "
         "tried.",
         f"**paper values**: the paper's text, or {SOURCE_MARKS[NOTEBOOK]} the authors' notebooks (not in the text; "

@@ -9,8 +9,8 @@ verdicts are in :mod:`~.grading`; what a claim holds and the EM policy in :mod:`
 from dataclasses import replace
 
 from dgmm.experiments.report.claims import convergence, decimation, fitting, odometry, registration, table1, theory
-from dgmm.experiments.report.claims.grading import (NOT, PARTLY, PENDING, REPRODUCED, RULE_KINDS, TIMING_NOISE,
-                                                    VERDICTS, Grade)
+from dgmm.experiments.report.claims.grading import (INCONCLUSIVE, NOT, PARTLY, PENDING, REPRODUCED, RULE_KINDS,
+                                                    TIMING_NOISE, VERDICTS, Grade)
 from dgmm.experiments.report.claims.measurements import TABLES, Measurements
 from dgmm.experiments.report.claims.rules import (FIG3_INPUTS, FIG4_INPUTS, HEADLINE, VARIANT_NAMES, VARIANTS, Claim,
                                                   in_paper_order)
@@ -48,6 +48,7 @@ def evaluate(data, stored=None):
     return in_paper_order(graded)
 
 
-__all__ = ["CLAIMS", "Claim", "FIG3_INPUTS", "FIG4_INPUTS", "Grade", "HEADLINE", "Measurements", "NOT", "PARTLY",
+__all__ = ["CLAIMS", "Claim", "FIG3_INPUTS", "FIG4_INPUTS", "Grade", "HEADLINE", "INCONCLUSIVE", "Measurements", "NOT",
+           "PARTLY",
            "PENDING", "REPRODUCED", "RULE_KINDS", "SECTIONS", "TABLES", "TIMING_NOISE", "VARIANTS", "VARIANT_NAMES",
            "VERDICTS", "evaluate"]

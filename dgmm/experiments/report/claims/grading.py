@@ -1,13 +1,15 @@
 """The grading framework: each claim's verdict follows from one of four rule kinds, each defined here once.
 
 - **comparison**: one number of ours against another, in the direction the claim states, with a *tie band* from
-  the measured noise of the two (twice the standard error of their difference). Beyond the band it is won or lost;
-  inside it, tied, and a tie counts neither way.
-- **share**: a claim's comparisons counted under the paper's quantifier (:data:`QUANTIFIERS`). Universal words
-  ("every", "always", "never") need every comparison won; a plain comparative ("A fits better than B") allows one
-  loss in ten among the untied comparisons, which must be no fewer than the ties; "often" needs half of all the
-  comparisons. "Partly" needs evidence beyond chance (a one-sided sign test at 5% over the untied comparisons, never
-  a coin flip) or no untied comparison lost.
+  the measured noise of the two: Student's t (97.5%, the difference's Welch-Satterthwaite degrees of freedom) times
+  the standard error of their difference. Beyond the band it is won or lost; inside it, tied, and a tie counts
+  neither way.
+- **share**: a claim's comparisons counted under the paper's quantifier (:data:`QUANTIFIERS`). The data can tell a
+  claim when its untied comparisons are no fewer than the ties. Universal words ("every", "always") need no untied
+  comparison lost; a plain comparative ("A fits better than B") allows one loss in ten among the untied comparisons;
+  "often" needs half of all the comparisons won. Where what is untied bears the claim out but the data cannot tell
+  it (every comparison tied, or more ties than untied ones), the verdict is *inconclusive*. "Partly" needs wins
+  beyond chance (a one-sided sign test at 5% over the untied comparisons, never a coin flip).
 - **equivalence**: a number within a stated margin of a target (the paper's value, zero, a ratio's 1): each is a
   comparison whose margin is the distance left to the edge, and its claim a share of them.
 - **time ratio**: CPU-time ratios of interleaved repeats; their median's 95% interval (order statistics, no
@@ -18,15 +20,18 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.stats import binom, binomtest
+from scipy.stats import binom, binomtest, t
 
-REPRODUCED, PARTLY, NOT, TIMING_NOISE, PENDING = ("reproduced", "partly", "not reproduced", "within timing noise",
-                                                   "pending")
-VERDICTS = (REPRODUCED, PARTLY, NOT, TIMING_NOISE, PENDING)
+REPRODUCED, PARTLY, NOT, INCONCLUSIVE, TIMING_NOISE, PENDING = (
+    "reproduced", "partly", "not reproduced", "inconclusive", "within timing noise", "pending")
+VERDICTS = (REPRODUCED, PARTLY, NOT, INCONCLUSIVE, TIMING_NOISE, PENDING)
 WIN, TIE, LOSS = "won", "tied", "lost"
 
 BAND_ERRORS = 2.0
-"""A tie band is this many standard errors of the difference compared (about a 95% band)."""
+"""Standard deviations of one Monte Carlo draw that bound a sampled value (the §II identity's check)."""
+BAND_LEVEL = 0.975
+"""A tie band is Student's t at this quantile times the standard error of the difference compared (a two-sided 95%
+band; 1.96 standard errors when the degrees of freedom are unbounded, 4.30 at 2)."""
 ALPHA = 0.05
 """Level of the one-sided sign test that "partly" needs, and one minus the timing interval's coverage."""
 PLAIN_SHARE = 0.9
@@ -69,36 +74,51 @@ class Comparison:
 
 @dataclass(frozen=True)
 class Estimate:
-    """A measured number and its standard error; differences carry the error of both sides."""
+    """A measured number, its standard error and the degrees of freedom of that error (unbounded for a bootstrap
+    over many trials); differences carry the error of both sides, with Welch-Satterthwaite's degrees of freedom."""
 
     value: float
     error: float = 0.0
+    dof: float = math.inf
 
     def __sub__(self, other):
-        return Estimate(self.value - other.value, math.hypot(self.error, other.error))
+        error = math.hypot(self.error, other.error)
+        parts = sum(e ** 4 / d for e, d in ((self.error, self.dof), (other.error, other.dof)) if e > 0)
+        return Estimate(self.value - other.value, error, error ** 4 / parts if parts > 0 else math.inf)
 
     def __neg__(self):
-        return Estimate(-self.value, self.error)
+        return Estimate(-self.value, self.error, self.dof)
 
     def __format__(self, spec):
         return format(self.value, spec)
 
+    @property
+    def band(self):
+        """Half-width of the tie band: Student's t at :data:`BAND_LEVEL` with ``dof`` times ``error``."""
+        return band_multiplier(self.dof) * self.error
+
+
+def band_multiplier(dof):
+    """Student's t at :data:`BAND_LEVEL` with ``dof`` degrees of freedom (the normal quantile when unbounded)."""
+    return float(t.ppf(BAND_LEVEL, dof)) if math.isfinite(dof) else float(t.ppf(BAND_LEVEL, np.inf))
+
 
 def estimate(values):
-    """Mean of ``values`` with its standard error (sample standard deviation over √n; 0 for one value)."""
+    """Mean of ``values`` with its standard error (sample standard deviation over √n; 0 for one value) on
+    ``n - 1`` degrees of freedom."""
     values = np.asarray(values, dtype=float)
     error = float(np.std(values, ddof=1) / np.sqrt(len(values))) if len(values) > 1 else 0.0
-    return Estimate(float(np.mean(values)), error)
+    return Estimate(float(np.mean(values)), error, max(len(values) - 1, 1))
 
 
 def compare(label, difference, *, higher=True, band=None, detail=""):
     """Comparison of a claim that ``difference`` (ours − other) is above zero (``higher``) or below it.
 
-    ``difference`` is an :class:`Estimate`, whose tie band is :data:`BAND_ERRORS` of its standard errors, or a
-    number with an explicit ``band``.
+    ``difference`` is an :class:`Estimate`, whose tie band is :attr:`Estimate.band`, or a number with an explicit
+    ``band``.
     """
     if isinstance(difference, Estimate):
-        value, band = difference.value, BAND_ERRORS * difference.error if band is None else band
+        value, band = difference.value, difference.band if band is None else band
     else:
         value, band = float(difference), 0.0 if band is None else band
     return Comparison(label, value if higher else -value, band, detail)
@@ -110,13 +130,21 @@ def within(label, value, target, margin, *, detail=""):
     return Comparison(label, margin - abs(value - target), 0.0, detail)
 
 
-def versus_paper(label, ours, published, decimals, *, detail=""):
+def versus_paper(label, ours, published, decimals, *, paper_error=None, detail=""):
     """Equivalence of ``ours`` (an :class:`Estimate`) with a published value printed to ``decimals`` places: within
-    the tie band of a difference of two such estimates (the paper's taken to have our standard error: the same
-    protocol and seeds) plus half the paper's last printed digit."""
-    margin = BAND_ERRORS * math.sqrt(2.0) * ours.error + 0.5 * 10.0 ** -decimals
+    the tie band of the difference of the two plus half the paper's last printed digit. The paper's standard error is
+    ``paper_error`` (an :class:`Estimate` of zero value carrying it and its degrees of freedom), by default ours: the
+    same protocol and seeds."""
+    paper = Estimate(0.0, ours.error, ours.dof) if paper_error is None else paper_error
+    margin = (ours - paper).band + 0.5 * 10.0 ** -decimals
     return within(label, ours.value, published, margin,
                   detail=detail or f"ours {ours.value:.{decimals + 1}f}, paper {published:.{decimals}f}")
+
+
+def same_protocol_error(ours, trials, paper_trials):
+    """The standard error of a mean the paper took over ``paper_trials`` trials, from ours over ``trials`` (the same
+    protocol: the spread of one trial is the same), as :func:`versus_paper`'s ``paper_error``."""
+    return Estimate(0.0, ours.error * math.sqrt(trials / paper_trials), ours.dof)
 
 
 def magnitude(difference):
@@ -185,25 +213,34 @@ class Quantifier:
     words: str
     rule: str
 
+    def holds(self, tally):
+        """Whether the claim's share holds on the comparisons counted (ties count neither way, except for
+        "often", whose share is of all)."""
+        wins, ties, losses = tally.counts
+        if self.name == "often":
+            return wins >= OFTEN * (wins + ties + losses)
+        if self.name == "every":
+            return wins > 0 and not losses
+        return wins > 0 and wins >= PLAIN_SHARE * (wins + losses) - 1e-9  # float-safe share
+
     def verdict(self, tally):
         """Verdict of a :class:`Tally` of at least one comparison."""
         wins, ties, losses = tally.counts
+        if self.holds(tally):
+            return REPRODUCED if wins + losses >= ties else INCONCLUSIVE
+        if wins + losses == 0:
+            return INCONCLUSIVE
         if self.name == "often":
-            total = wins + ties + losses
-            return REPRODUCED if wins >= OFTEN * total else PARTLY if wins >= SOMETIMES * total else NOT
-        if self.name == "every":
-            reproduced = wins and not ties and not losses
-        else:  # most of the decided comparisons won, and the decided ones at least as many as the undecided
-            reproduced = wins and wins >= PLAIN_SHARE * (wins + losses) - 1e-9 and wins >= ties  # float-safe share
-        if reproduced:
-            return REPRODUCED
-        return PARTLY if tally.beyond_chance() or (wins and not losses) else NOT
+            return PARTLY if wins >= SOMETIMES * (wins + ties + losses) else NOT
+        return PARTLY if tally.beyond_chance() else NOT
 
 
-PARTLY_RULE = "partly when the wins are beyond chance (sign test) or no untied comparison is lost"
-EVERY = Quantifier("every", "every, all, always, never", "reproduced when every comparison is won")
+PARTLY_RULE = "partly when the wins are beyond chance (sign test)"
+TELLS_RULE = ("the data tell a claim when its untied comparisons are no fewer than the ties; where they cannot, "
+              "a share that holds on the untied ones, or a claim whose every comparison is tied, is *inconclusive*")
+EVERY = Quantifier("every", "every, all, always, never", "reproduced when no untied comparison is lost")
 PLAIN = Quantifier("plain", "a plain comparative, usually, largely", f"reproduced when ≥ {PLAIN_SHARE:.0%} of the "
-                   "untied comparisons are won and they are no fewer than the ties")
+                   "untied comparisons are won")
 OFTEN_WORDS = Quantifier("often", "often", f"reproduced when ≥ {OFTEN:.0%} of all comparisons are won, partly at "
                          f"≥ {SOMETIMES:.0%}")
 QUANTIFIERS = (EVERY, PLAIN, OFTEN_WORDS)
@@ -254,11 +291,15 @@ class Grade:
 
 def grade_share(comparisons, quantifier, cause=""):
     """Grade of a share rule: ``comparisons`` counted under ``quantifier``; ``cause`` is kept when the verdict is
-    not reproduced."""
+    partly or not reproduced; an inconclusive one says how many comparisons the noise leaves undecided."""
     tally = Tally(tuple(comparisons))
     wins, ties, losses = tally.counts
     verdict = quantifier.verdict(tally)
     ours = f"{wins}/{wins + ties + losses} won" + (f", {ties} tied" if ties else "")
+    if verdict == INCONCLUSIVE:
+        cause = ("The data cannot tell: " + (f"all {ties} comparisons lie inside their noise." if not wins + losses
+                 else f"{ties} of {wins + ties + losses} comparisons lie inside their noise; the untied ones bear the "
+                 "claim out."))
     return Grade(verdict, ours, "" if verdict == REPRODUCED else cause)
 
 
@@ -298,12 +339,13 @@ def grade_time(ratio, cause=""):
 
 
 RULE_KINDS = {
-    "comparison": f"ours against another number in the claim's direction, tied within {BAND_ERRORS:g} standard errors "
-                  "of the difference (the seeds' spread of the sweep's fits; a paired bootstrap over registration "
-                  "trials); a tie counts neither way",
+    "comparison": "ours against another number in the claim's direction, tied within Student's t (97.5%, the "
+                  "difference's degrees of freedom) standard errors of the difference (the seeds' spread of the "
+                  "sweep's fits; a paired bootstrap over registration trials: 1.96); a tie counts neither way",
     "share": "the comparisons counted by the paper's quantifier: " + "; ".join(
         f"*{q.name}* ({q.words}) {q.rule}" for q in QUANTIFIERS)
-    + f"; for *every* and *plain*, {PARTLY_RULE} (one-sided, {ALPHA:.0%}, over the untied comparisons)",
+    + f"; {TELLS_RULE}; for *every* and *plain*, {PARTLY_RULE} (one-sided, {ALPHA:.0%}, over the untied "
+    "comparisons)",
     "equivalence": "a number within a stated margin of a target (the paper's value, zero, rounding), counted as a "
                    "share",
     "time ratio": f"CPU-time ratios of interleaved repeats; the median's {1 - ALPHA:.0%} interval (order statistics) "
