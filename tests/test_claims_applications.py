@@ -239,3 +239,16 @@ def test_the_authors_seed_spread_is_the_one_their_seed_table_shows():
     assert [len(run) for run in runs] == [5, 5]
     squares = sum(((run / run.mean() - 1) ** 2).sum() for run in runs)
     assert round(float(np.sqrt(squares / 8)), 3) == odometry.AUTHORS_ATE_SEED_SPREAD
+
+
+def test_towards_the_worst_quartile_means_past_the_midpoint_of_median_and_q3():
+    # 200 trials of 1.00 ... 4.98 and some more. One more at 5.0: median 3.0, Q3 4.0, midpoint 3.5, mean 3.0: above
+    # the median, yet nowhere near Q3: lost. 40 more at 20.0 (240 trials): median 3.39, Q3 4.585, midpoint 3.99, mean
+    # 5.83 (bootstrap error about 0.4): past the midpoint beyond its band: won (Q3 interpolated: 4.585).
+    base = [1.0 + 0.02 * i for i in range(200)]
+    rows = lambda extra: (registration_rows("bunny", "res4", "points-kmeans", base + extra, base + extra)  # noqa: E731
+                          + registration_rows("bunny", "res4", "points-random", base + extra, base + extra))
+    assert registration.points_mean_towards_worst_quartile(Measurements(registration=rows([5.0]))).verdict == (
+        "not reproduced")
+    claim = registration.points_mean_towards_worst_quartile(Measurements(registration=rows([20.0] * 40)))
+    assert claim.verdict == "reproduced" and "median 3.39, mean 5.83, Q3 4.58" in claim.evidence

@@ -56,6 +56,13 @@ def _mean_above(q):
     return lambda values, axis=None: np.mean(values, axis=axis) - np.percentile(values, q, axis=axis)
 
 
+def _mean_past_midway(values, axis=None):
+    """The statistic "mean − the midpoint of the median and Q3": above 0, the mean lies nearer the worst quartile
+    than the median."""
+    middle, top = np.percentile(values, 50, axis=axis), np.percentile(values, 75, axis=axis)
+    return np.mean(values, axis=axis) - (middle + top) / 2
+
+
 def _errors(data, variant):
     """``method -> {"rot": array, "trans": array}`` of Fig 6's methods on bunny res4 (None: not configured)."""
     errors = data.errors(variant)
@@ -239,8 +246,9 @@ def all_within_model_size(data):
         comparisons = [compare(m, Estimate(TRANSLATION_LIMIT) - bootstrap(np.mean, e["trans"]),
                                detail=f"{np.mean(e['trans']):.3g}%") for m, e in errors.items()]
         worst = max(errors, key=lambda m: np.mean(errors[m]["trans"]))
+        outcome = next(c.outcome for c in comparisons if c.label == worst)
         return (replace(grade_share(comparisons, EVERY, f"{worst}'s mean is above {TRANSLATION_LIMIT}% beyond its "
-                                    "noise."), ours=f"worst {worst} {np.mean(errors[worst]['trans']):.2f}%"),
+                                    "noise."), ours=f"worst {worst} {np.mean(errors[worst]['trans']):.2f}% ({outcome})"),
                 ", ".join(str(c) for c in comparisons) + unwon(comparisons))
 
     grades, lines = per_variant(grade)
@@ -359,7 +367,8 @@ def points_mean_towards_worst_quartile(data):
     """§VI-B: "the point-based GMM P2D registration results had outliers that dragged the mean towards the worst
     quartile of results"."""
     args = ("§VI-B", "Fig 6", "The points GMMs' outliers drag their mean towards the worst quartile")
-    rule = "share, plain: one (points GMM, error), mean error > median (band: bootstrap); context: how far to Q3"
+    rule = ("share, plain: one (points GMM, error), the mean past the midpoint of the median and Q3, nearer the worst "
+            "quartile than the median (band: bootstrap)")
     errors = _errors(data, "textbook") or {}
     if not set(POINTS) & errors.keys():
         return pending(*args, rule, WHAT, "towards the worst quartile", WORDS)
@@ -367,10 +376,10 @@ def points_mean_towards_worst_quartile(data):
     for m in POINTS:
         for name, values in errors.get(m, {}).items():
             mean, middle, top = np.mean(values), np.median(values), np.percentile(values, 75)
-            comparisons.append(compare(f"{m} {ERROR_NAMES[name]}", bootstrap(_mean_above(50), values),
+            comparisons.append(compare(f"{m} {ERROR_NAMES[name]}", bootstrap(_mean_past_midway, values),
                                        detail=f"median {middle:.3g}, mean {mean:.3g}, Q3 {top:.3g}: "
                                               f"{(mean - middle) / (top - middle):.2f} of the way from median to Q3"))
-    grade = grade_share(comparisons, PLAIN, "Some points GMM's mean is not above its median beyond its noise.")
+    grade = grade_share(comparisons, PLAIN, "Some points GMM's mean stays nearer its median than its worst quartile.")
     return Claim(*args, rule, "; ".join(str(c) for c in comparisons) + unwon(comparisons)
                  + ". Points GMMs: the same for both EMs.", same(grade),
                  "towards the worst quartile", WORDS)
