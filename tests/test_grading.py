@@ -182,3 +182,21 @@ def test_a_timing_interval_that_straddles_its_threshold_gives_no_verdict():
     assert above.verdict == NOT
     similar = TimeRatio(tuple(np.linspace(0.6, 1.9, 11)), 0.5, 2.0)
     assert similar.verdict == REPRODUCED
+
+
+def test_against_rivals_each_rival_keeps_its_own_band():
+    from dgmm.experiments.report.claims.inits import versus_rivals
+
+    # Ours 8.00 ± 0.01; rival A 8.05 ± 0.2 (the highest mean, but noisy: a tie), rival B 8.03 ± 0.005 (lower, but
+    # 0.03 above ours beyond its band 1.96·√(0.01² + 0.005²) = 0.022: a loss). Against the highest mean alone the
+    # comparison would be a tie; against each, B decides it: lost.
+    ours, rivals = Estimate(8.0, 0.01), {"A": Estimate(8.05, 0.2), "B": Estimate(8.03, 0.005)}
+    rival, comparison = versus_rivals("K=6", ours, rivals, lambda name, value: f"vs {name} {value:.2f}")
+    assert (rival, comparison.outcome, comparison.detail) == ("B", LOSS, "vs B 8.03")
+    # Above both beyond their bands: won, decided by the one beaten by least.
+    rival, comparison = versus_rivals("K=6", Estimate(9.0, 0.01), rivals, lambda name, value: name)
+    assert (rival, comparison.outcome) == ("A", WIN)
+    # No loss, one tie: tied.
+    rival, comparison = versus_rivals("K=6", Estimate(8.1, 0.01), rivals, lambda name, value: name)
+    assert (rival, comparison.outcome) == ("A", TIE)
+    assert versus_rivals("K=6", ours, {}, str) == (None, None)

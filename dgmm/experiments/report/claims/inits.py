@@ -2,7 +2,7 @@
 k-means − random gaps, and the two contrasts the paper draws from them."""
 import numpy as np
 
-from dgmm.experiments.report.claims.grading import OFTEN_WORDS, WIN, compare, estimate, magnitude
+from dgmm.experiments.report.claims.grading import LOSS, OFTEN_WORDS, TIE, WIN, compare, estimate, magnitude
 from dgmm.experiments.report.claims.rules import (FIG3_MODEL, Cause, Claim, em, fitted_variant, graded_per_em,
                                                   graded_share, is_mesh, listing, pending, same, switch_or_not_found)
 
@@ -36,10 +36,28 @@ def init_gaps(estimates, model, inputs, variant):
             for name in inputs if name in cell and name in table.get(("random", k), {})}
 
 
-def best(cell, names):
-    """``(name, Estimate)`` of the highest mean among ``names`` in a cell (None when none was fitted)."""
-    fitted = [(name, cell[name]) for name in names if name in cell]
-    return max(fitted, key=lambda item: item[1].value, default=None)
+def versus_rivals(label, ours, rivals, detail):
+    """``ours`` (an Estimate) against every rival of ``rivals`` (name -> Estimate), each with its own tie band: lost
+    when any rival is above it beyond its band, won when it is above every one beyond theirs, else tied. (Against
+    only the highest rival mean, the maximum of noisy means, with that rival's error alone, ours would lose to
+    noise: a winner's curse.)
+
+    Returns
+    -------
+    rival : the name that decides: the one ours loses to by most, else the one it ties nearest, else the one it
+        beats by least (None when ``rivals`` is empty).
+    comparison : its Comparison, labelled ``label``, its detail ``detail(rival, rival's Estimate)``.
+    """
+    if not rivals:
+        return None, None
+    compared = {name: compare(label, ours - value) for name, value in rivals.items()}
+
+    def deciding(name):
+        c = compared[name]
+        return {LOSS: (0, c.margin + c.band), TIE: (1, c.margin), WIN: (2, c.margin - c.band)}[c.outcome]
+
+    rival = min(compared, key=deciding)
+    return rival, compare(label, ours - rivals[rival], detail=detail(rival, rivals[rival]))
 
 
 def median(values):
