@@ -19,6 +19,18 @@ def _authors(sizes):
     return sizes / sizes[present].min(), present.astype(float)
 
 
+def _authors_estep(sizes):
+    """The authors' E-step (scaled by ``alpha_p / min(alpha)``) with textbook EM's size-weighted M-step: one half
+    of what the authors' EM changes, to measure which half moves a result (docs/studies/em_halves.md)."""
+    return _authors(sizes)[0], _textbook(sizes)[1]
+
+
+def _authors_mstep(sizes):
+    """Textbook EM's unscaled E-step with the authors' unweighted M-step: the other half."""
+    return _textbook(sizes)[0], _authors(sizes)[1]
+
+
 # variant -> function(sizes) -> (E-step scale per primitive, M-step weight per primitive)
-VARIANTS = {"textbook": _textbook, "authors": _authors}
+VARIANTS = {"textbook": _textbook, "authors": _authors, "authors-estep": _authors_estep,
+            "authors-mstep": _authors_mstep}
 INITS = ("kmeans", "random")

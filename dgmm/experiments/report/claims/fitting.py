@@ -13,7 +13,7 @@ from dataclasses import replace
 from dgmm.experiments.report import paper
 from dgmm.experiments.report.claims.grading import EVERY, PLAIN, WIN, compare, estimate, versus_paper, within
 from dgmm.experiments.report.claims.inits import cells, init_contrast, prefer_an_init, still_climbing, versus_rivals
-from dgmm.experiments.report.claims.rules import (FIG3_INPUTS, FIG3_MODEL, HIGH_K, NOTEBOOK, SCALING, TEXT,
+from dgmm.experiments.report.claims.rules import (FIG3_INPUTS, FIG3_MODEL, HALVES, HIGH_K, NOTEBOOK, SCALING, TEXT,
                                                   VARIANT_NAMES, VARIANTS, Cause, Claim, by_cause, capital, em,
                                                   em_switch, graded_per_em, graded_share, is_mesh, listing, misses,
                                                   other_em, pending)
@@ -86,8 +86,8 @@ def _early_exit_cause(short, rows):
         scaled = meshes[0]["variant"] == "authors" and 2 * again < len(meshes)
         parts.append(_fits(len(meshes), "mesh"))
         found.append(f"{_fits(len(meshes), 'mesh')} ({_count_by_input(meshes)})" + (
-            f"; textbook EM's fits of the same (input, start, K, seed index) stop early in {again}: {SCALING}, with "
-            "their unweighted M-step, is the switch" if scaled else ""))
+            f"; textbook EM's fits of the same (input, start, K, seed index) stop early in {again}: the authors' EM "
+            "is the switch (which of its halves stops them is not measured)" if scaled else ""))
         if scaled and not points:
             return Cause(f"{capital(SCALING)}: {parts[0]} reach a fixed point before iteration 25, "
                          f"{again or 'none'} of them under textbook EM.", f"{_TOLERANCE_RULE}: {found[0]}")
@@ -181,7 +181,7 @@ def exact_best_approx_second(data):
                            f"comparison{'s' * (count != 1)}; {em(other)}'s meshes win only {sum(flipped)}."))
             found.append(f"a point input matches or beats the meshes in {count} k-means comparisons at K < {HIGH_K} "
                          f"({worst}), where {em(other)}'s meshes beat the same point fits in {sum(flipped)}"
-                         + (f": {SCALING}, with their unweighted M-step, is the switch" if scaled else ""))
+                         + (f": the authors' EM is the switch, and of its two halves {HALVES}" if scaled else ""))
         if groups["collapse"]:
             comparison, init, k, name, _ = groups["collapse"][-1]
             peak = max(cell[name].value for (start, _), cell in tables[variant].items() if start == init)
