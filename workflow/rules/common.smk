@@ -16,7 +16,7 @@ from dgmm.experiments.trials import METHODS, NO_VARIANT, PROTOCOLS, method_varia
 
 validate(config, schema="../schemas/config.schema.yaml")
 
-RESULTS = config.get("results", "results")
+RESULTS = config["results"]
 DATA = config["data"]
 DATA_DIR = f"{RESULTS}/data"
 FIT = config["fit"]
@@ -297,10 +297,8 @@ def report_inputs():
         "fig2": rules.fig2.output.table,
         "authors": rules.authors_data.output.table,
     }
-    if "registration" in config:
-        inputs["registration"] = rules.registration_table.output.errors
-    if "registration" in config:
-        inputs["registration_seconds"] = rules.registration_table.output.seconds
+    inputs["registration"] = rules.registration_table.output.errors
+    inputs["registration_seconds"] = rules.registration_table.output.seconds
     if "odometry" in config:
         inputs.update(
             odometry=f"{RESULTS}/tables/odometry.csv",
@@ -346,6 +344,5 @@ def report_figures():
         if "bunny" in e["models"]
         for name in e["inputs"]
     }
-    if "registration" in config:
-        configured |= {f"{model}/{mesh}" for model, mesh in REG_EXPERIMENTS}
+    configured |= {f"{model}/{mesh}" for model, mesh in REG_EXPERIMENTS}
     return figure_names(report_inputs(), configured)

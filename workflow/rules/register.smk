@@ -21,7 +21,7 @@ REG_WILDCARDS = dict(
     protocol="|".join(PROTOCOLS),
     variant=f"textbook|authors|{NO_VARIANT}",
 )
-C2F_SCALES = REG.get("c2f_scales", [0.5, 0.25, 0.125, 0.0625, 0.0])
+C2F_SCALES = REG["c2f_scales"]
 REG_MIXTURE = {key: REG[key] for key in ("components", "max_iter", "tol", "reg_covar")}
 
 
