@@ -67,14 +67,15 @@ def fresh_dgmm_modules():
 @pytest.mark.parametrize("missing, module, extra", [
     ("pymeshlab", "dgmm.meshes", "meshes"),
     ("rerun", "dgmm.recording", "recording"),
-    ("mcap", "dgmm.recording.mcap_writer", "recording"),
+    ("mcap", "dgmm.recording", "recording"),
     ("PIL", "dgmm.odometry", "odometry"),
     ("isal", "dgmm.odometry.depth_png", "odometry"),
     ("mcap_ros2", "dgmm.odometry.ros2_mcap", "ros2"),
     ("matplotlib", "dgmm.odometry.figure", "figures"),
 ])
 def test_a_missing_extra_is_one_line_naming_it(monkeypatch, fresh_dgmm_modules, missing, module, extra):
-    monkeypatch.setitem(sys.modules, missing, None)  # its import now fails as if it were not installed
+    for name in [missing, *(name for name in sys.modules if name.startswith(missing + "."))]:
+        monkeypatch.setitem(sys.modules, name, None)  # its imports now fail as if it were not installed
     for name in [name for name in sys.modules if name == module or name.startswith(module + ".")]:
         del sys.modules[name]
     with pytest.raises(MissingDependency) as info:
