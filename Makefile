@@ -11,7 +11,7 @@ CORES ?= 2
 $(STAMP): pyproject.toml
 	test -x $(VENV)/bin/python || $(PYTHON) -m venv $(VENV)
 	$(VENV)/bin/python -m pip install --quiet --upgrade pip
-	$(VENV)/bin/python -m pip install --quiet -e '.[test,slurm,docs]'
+	$(VENV)/bin/python -m pip install --quiet -e '.[all,test,slurm,docs]'
 	touch $(STAMP)
 
 run: $(STAMP)

@@ -20,7 +20,7 @@ from pathlib import Path
 from typing import Callable
 
 from dgmm import __version__
-from dgmm.errors import DataError, DgmmError, FitError, InputError
+from dgmm.errors import DataError, DgmmError, FitError, InputError, MissingDependency
 from dgmm.variants import INITS, VARIANTS
 
 # numpy, the file readers (trimesh, scipy), the estimator (scikit-learn), registration and the recorders (rerun,
@@ -147,17 +147,17 @@ def _open_recorder(stack, mcap, rrd, params, data, seed):
     finish : callable(model) or None
         To call with the fitted model before ``stack`` closes.
     """
-    from dgmm.recording import FitRecorder, RerunRecorder
+    if mcap is None and rrd is None:
+        return None, None
+    from dgmm.recording import FitRecorder, RerunRecorder  # rerun and mcap: the recording extra
 
     if mcap is not None:
         recorder = stack.enter_context(FitRecorder(mcap, rrd, params=params, data=data))
         recorder.begin_seed(seed)
         return recorder, recorder.end_seed
-    if rrd is not None:
-        recorder = stack.enter_context(RerunRecorder(rrd))
-        recorder.log_input(data)
-        return recorder, None
-    return None, None
+    recorder = stack.enter_context(RerunRecorder(rrd))
+    recorder.log_input(data)
+    return recorder, None
 
 
 @contextmanager
@@ -355,14 +355,14 @@ def viewer_command(path):
     ------
     DataError
         ``path`` does not exist.
-    DgmmError
+    MissingDependency
         No ``rerun`` program is installed.
     """
     path = _require_file(path)
     beside = Path(sys.executable).parent / "rerun"
     program = str(beside) if beside.is_file() else shutil.which("rerun")
     if program is None:
-        raise DgmmError("the rerun viewer is not installed (pip install rerun-sdk)")
+        raise MissingDependency("the rerun viewer is not installed: pip install 'dgmm[recording]'")
     return [program, str(path)]
 
 
@@ -392,7 +392,6 @@ def _odometry(args):
     from dgmm.odometry import first_frames, open_sequence, run_odometry
     from dgmm.odometry.metrics import drift_metrics
     from dgmm.odometry.tum import write_trajectory
-    from dgmm.recording import OdometryRecorder
 
     sequence = open_sequence(args.sequence, args.depth_topic, args.camera_info_topic, args.groundtruth)
     try:
@@ -413,6 +412,8 @@ def _odometry(args):
         bar = stack.enter_context(_progress_bar(n_frames, desc="odometry", unit="frame"))
         recorder = None
         if args.mcap is not None or args.rrd is not None:  # the recorder always writes MCAP: a discarded copy
+            from dgmm.recording import OdometryRecorder  # rerun and mcap: the recording extra
+
             mcap = args.mcap or Path(stack.enter_context(tempfile.TemporaryDirectory())) / "odometry.mcap"
             recorder = stack.enter_context(OdometryRecorder(mcap, args.rrd, params=params, groundtruth=groundtruth,
                                                             intrinsics=intrinsics,

@@ -8,9 +8,11 @@ the same calls in the same order therefore gets the same samples, which is why t
 its own job.
 """
 import numpy as np
-import pymeshlab
 
-from dgmm.errors import InputError
+from dgmm.errors import InputError, needs
+
+with needs("meshes"):
+    import pymeshlab
 
 POISSON_RTOL = 0.005  # Poisson-disk point count within 0.5% of the budget
 CLUSTERING_RTOL = 0.05  # clustering face count within 5% of the budget

@@ -13,9 +13,11 @@ from __future__ import annotations
 import struct
 
 import numpy as np
-from isal import isal_zlib
 
-from dgmm.errors import DataError
+from dgmm.errors import DataError, needs
+
+with needs("odometry"):
+    from isal import isal_zlib
 
 _SIGNATURE = b"\x89PNG\r\n\x1a\n"
 _NONE, _SUB = 0, 1  # PNG row filter types

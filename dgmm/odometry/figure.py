@@ -7,13 +7,14 @@ Positions are in metres, in the ground truth's world frame, which is z-up for TU
 the ground truth by the rigid alignment of its ATE (``dgmm.odometry.metrics.absolute_trajectory_error``), as TUM's
 and evo's trajectory plots do.
 """
-from matplotlib.figure import Figure
-
-from dgmm.errors import InputError
+from dgmm.errors import InputError, needs
 from dgmm.files import atomic_path
 from dgmm.odometry.metrics import absolute_trajectory_error
 from dgmm.odometry.protocols import PROTOCOLS
 from dgmm.odometry.tum import MAX_TIME_DIFFERENCE, read_trajectory
+
+with needs("figures"):
+    from matplotlib.figure import Figure
 
 PLANES = {"xy": (0, 1), "xz": (0, 2), "yz": (1, 2)}
 """Top-down plane name -> the two world axes drawn (horizontal, vertical)."""

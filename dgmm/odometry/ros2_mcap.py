@@ -24,16 +24,18 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-import yaml
-from mcap.reader import make_reader
-from mcap_protobuf.decoder import DecoderFactory as ProtobufDecoderFactory
-from mcap_ros2.decoder import DecoderFactory as Ros2DecoderFactory
-from mcap_ros2.writer import Writer
 
-from dgmm.errors import DataError, InputError
+from dgmm.errors import DataError, InputError, needs
 from dgmm.files import atomic_open
 from dgmm.odometry.pixels import Intrinsics, parse_intrinsics
 from dgmm.odometry.tum import Trajectory, read_trajectory
+
+with needs("ros2"):
+    import yaml
+    from mcap.reader import make_reader
+    from mcap_protobuf.decoder import DecoderFactory as ProtobufDecoderFactory
+    from mcap_ros2.decoder import DecoderFactory as Ros2DecoderFactory
+    from mcap_ros2.writer import Writer
 
 DEPTH_ENCODINGS = {"16UC1": (np.uint16, 1000.0), "32FC1": (np.float32, 1.0)}
 """Depth image encoding -> (pixel type, units per metre): REP 118's millimetres and metres."""

@@ -14,13 +14,15 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from PIL import Image, UnidentifiedImageError
 
-from dgmm.errors import DataError, InputError
+from dgmm.errors import DataError, InputError, needs
 from dgmm.files import atomic_open
 from dgmm.odometry.depth_png import decode_gray16, encode_gray16
 from dgmm.odometry.pixels import parse_intrinsics, sequence_intrinsics
 from dgmm.registration import matrix_to_quaternion, quaternion_to_matrix
+
+with needs("odometry"):
+    from PIL import Image, UnidentifiedImageError
 
 DEPTH_SCALE = 5000.0
 """TUM depth PNG units per metre (file_formats: "depth images are scaled by a factor of 5000")."""

@@ -22,16 +22,20 @@ One concept per module:
 Every file is written under a temporary name beside its target and renamed on a clean close, so a failed job
 leaves no partial output (:mod:`~dgmm.recording.output`).
 """
-from dgmm.recording.blueprints import fit_blueprint, odometry_blueprint, registration_blueprint
-from dgmm.recording.ellipsoids import DEFAULT_N_SIGMA, covariance_ellipsoids
-from dgmm.recording.fit_recorder import FitRecorder
-from dgmm.recording.foxglove_messages import ellipsoid_scene_update, poses_in_frame
-from dgmm.recording.json_schemas import (FIT_ITERATION_SCHEMA, FIT_PARAMS_SCHEMA, ODOMETRY_FRAME_SCHEMA,
-                                         ODOMETRY_PARAMS_SCHEMA, REGISTRATION_PARAMS_SCHEMA, REGISTRATION_TRIAL_SCHEMA)
-from dgmm.recording.mcap_writer import TICK_NS, McapWriter
-from dgmm.recording.odometry_recorder import OdometryRecorder
-from dgmm.recording.registration_recorder import RegistrationRecorder
-from dgmm.recording.rerun_recorder import RerunRecorder, rerun_ellipsoids
+from dgmm.errors import needs
+
+with needs("recording"):  # rerun, mcap and Foxglove's protobuf types, imported by every recorder
+    from dgmm.recording.blueprints import fit_blueprint, odometry_blueprint, registration_blueprint
+    from dgmm.recording.ellipsoids import DEFAULT_N_SIGMA, covariance_ellipsoids
+    from dgmm.recording.fit_recorder import FitRecorder
+    from dgmm.recording.foxglove_messages import ellipsoid_scene_update, poses_in_frame
+    from dgmm.recording.json_schemas import (FIT_ITERATION_SCHEMA, FIT_PARAMS_SCHEMA, ODOMETRY_FRAME_SCHEMA,
+                                             ODOMETRY_PARAMS_SCHEMA, REGISTRATION_PARAMS_SCHEMA,
+                                             REGISTRATION_TRIAL_SCHEMA)
+    from dgmm.recording.mcap_writer import TICK_NS, McapWriter
+    from dgmm.recording.odometry_recorder import OdometryRecorder
+    from dgmm.recording.registration_recorder import RegistrationRecorder
+    from dgmm.recording.rerun_recorder import RerunRecorder, rerun_ellipsoids
 
 __all__ = [
     "DEFAULT_N_SIGMA", "FIT_ITERATION_SCHEMA", "FIT_PARAMS_SCHEMA", "ODOMETRY_FRAME_SCHEMA", "ODOMETRY_PARAMS_SCHEMA",
