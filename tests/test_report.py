@@ -323,8 +323,8 @@ def test_report_writes_every_output(built):
     marks = "[" + "".join(BADGE_MARKS.values()) + "]"
     assert len(re.findall(rf'<a id="claim-\d+"></a>{marks}{{2}} \w', markdown)) == len(claims.CLAIMS)
     ledger = (out / "claims.md").read_text()
-    assert len(re.findall(r"— authors' EM \S+ \*\*(reproduced|partly|not reproduced|within timing noise|pending)\*\*",
-                          ledger)) == len(claims.CLAIMS)
+    verdicts = "|".join(claims.VERDICTS)
+    assert len(re.findall(rf"— authors' EM \S+ \*\*({verdicts})\*\*", ledger)) == len(claims.CLAIMS)
     # The summary table opens the report: one row per claim, each not reproduced saying why.
     html_page = (out / "report.html").read_text()
     summary = html_page[html_page.index("<h1>"):html_page.index('<h2 id="grading">')]
