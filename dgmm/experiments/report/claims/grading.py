@@ -100,7 +100,7 @@ class Estimate:
 
 def band_multiplier(dof):
     """Student's t at :data:`BAND_LEVEL` with ``dof`` degrees of freedom (the normal quantile when unbounded)."""
-    return float(t.ppf(BAND_LEVEL, dof)) if math.isfinite(dof) else float(t.ppf(BAND_LEVEL, np.inf))
+    return float(t.ppf(BAND_LEVEL, dof))
 
 
 def estimate(values):

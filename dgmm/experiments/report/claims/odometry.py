@@ -40,6 +40,16 @@ AUTHORS_ATE_SEED_SPREAD = 0.625
 seed table, which a test reads back); wide because one seed of the points loses a frame and ends at 4x the ATE."""
 
 
+def _is_ours(row):
+    """Whether an odometry.csv row ran our protocol (ICP's, with no protocol, serves every one)."""
+    return row.get("protocol", OURS) in ("", OURS)
+
+
+def _spread(ours):
+    """A one-seed run's relative ATE error: our protocol's seed spread, or the authors'."""
+    return ATE_SEED_SPREAD if ours else AUTHORS_ATE_SEED_SPREAD
+
+
 def _ates(rows, variant):
     """``sequence -> {method: Estimate}``: ATE RMSE over the seeds of each run of ``variant``. ICP, which has no EM,
     the plain-point GMM, whose one textbook run is every variant's (all sizes are 1), and the runs of the authors'
@@ -47,13 +57,12 @@ def _ates(rows, variant):
     (ICP runs every frame, the authors' protocols a prefix)."""
     runs, frames, spreads = defaultdict(lambda: defaultdict(list)), {}, {}
     for row in rows or []:
-        serves = (("", variant, "textbook") if row.get("method") in UNSIZED_METHODS else ("", variant))
-        if (row.get("method") and (row.get("variant", "") in serves or row.get("protocol", OURS) not in ("", OURS))
+        serves = ("", variant, "textbook") if row.get("method") in UNSIZED_METHODS else ("", variant)
+        if (row.get("method") and (row.get("variant", "") in serves or not _is_ours(row))
                 and row.get("ate_rmse_m", "") != ""):
             runs[row["sequence"]][row["method"]].append(float(row["ate_rmse_m"]))
             frames[row["sequence"], row["method"]] = row.get("frames", "")
-            spreads[row["sequence"], row["method"]] = (ATE_SEED_SPREAD if row.get("protocol", OURS) in ("", OURS)
-                                                       else AUTHORS_ATE_SEED_SPREAD)
+            spreads[row["sequence"], row["method"]] = _spread(_is_ours(row))
     return {sequence: {method: _estimate(values, spreads[sequence, method]) for method, values in methods.items()
                        if frames[sequence, method] == frames.get((sequence, "gmm-pixels"), frames[sequence, method])}
             for sequence, methods in runs.items()}
@@ -71,7 +80,7 @@ def _estimate(values, spread):
 
 def _ours(rows):
     """Whether every mixture run of ``rows`` ran our protocol."""
-    return all(row.get("protocol", OURS) in ("", OURS) for row in rows or [])
+    return all(map(_is_ours, rows or []))
 
 
 def _seed_count(rows):
@@ -84,18 +93,16 @@ def _seeds(rows):
     if _seed_count(rows) > 1:
         return f"band: Student's t standard errors over {_seed_count(rows)} seeds"
     band = f"one seed per run, band: t ({SPREAD_DOF} degrees of freedom) standard errors, a run's error"
-    if _ours(rows):
-        return (f"{band} {ATE_SEED_SPREAD:.1%} of its ATE (the seed spread measured on fr1/xyz, "
-                "docs/studies/odometry_drift.md)")
-    return (f"{band} {AUTHORS_ATE_SEED_SPREAD:.1%} of its ATE (the seed spread of the authors' protocol on fr1/xyz's "
-            "first 100 frames, docs/benchmarks/odometry.md)")
+    where = ("the seed spread measured on fr1/xyz, docs/studies/odometry_drift.md" if _ours(rows) else
+             "the seed spread of the authors' protocol on fr1/xyz's first 100 frames, docs/benchmarks/odometry.md")
+    return f"{band} {_spread(_ours(rows)):.1%} of its ATE ({where})"
 
 
 def _schedule(rows):
     """``" (per-frame schedule: ...)"`` when the table names the GMM runs' schedule (odometry.schedule), with the
     frames of the authors' protocol's runs, else ""."""
     names = sorted({row["schedule"] for row in rows or [] if row.get("schedule")})
-    frames = sorted({row["frames"] for row in rows or [] if row.get("protocol", OURS) not in ("", OURS)})
+    frames = sorted({row["frames"] for row in rows or [] if not _is_ours(row)})
     return (f" (per-frame schedule: {', '.join(names)}" + (f"; first {', '.join(frames)} frames" if frames else "")
             + ")" if names else "")
 
@@ -117,7 +124,7 @@ def _pixel_cause(rows, comparisons, variant):
     improvement = paper.FIG7_ATE_M["gmm-points"] / paper.FIG7_ATE_M["gmm-pixels"] - 1
     lost = [c.label for c in comparisons if c.outcome == "lost"]
     tied = (f"The paper's {improvement:.1%} is inside a run's seed spread "
-            f"({ATE_SEED_SPREAD if _ours(rows) else AUTHORS_ATE_SEED_SPREAD:.1%}, fr1/xyz)"
+            f"({_spread(_ours(rows)):.1%}, fr1/xyz)"
             if _seed_count(rows) < 2 else "The differences are inside the seeds' spread")
     if not _ours(rows):  # one run serves both EMs
         return Cause(tied + (f"; {', '.join(lost)} lost: cause not found." if lost else "."))
