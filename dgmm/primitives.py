@@ -59,7 +59,7 @@ def triangle_moments(triangles):
         ``|e1 ∧ e2| / 2`` of the edges ``e1 = B − A``, ``e2 = C − A`` (in 3-D the norm of their cross product; in
         any dimension ``|e1 ∧ e2|² = Σ_{i<j} (e1_i e2_j − e1_j e2_i)²``, Lagrange's identity).
     covariances : ndarray of shape (n_triangles, d, d)
-        ``(A Aᵀ + B Bᵀ + C Cᵀ − 3 m mᵀ) / 12`` with ``m`` the centroid (paper eq. 9, ``cov(△)``): the triangle's
+        ``(A Aᵀ + B Bᵀ + C Cᵀ − 3 m mᵀ) / 12`` with ``m`` the centroid (paper eq. 10, ``cov(△)``): the triangle's
         affine map of the standard simplex, so the formula holds in any dimension.
     """
     centroids = triangles.mean(axis=1)

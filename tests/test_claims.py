@@ -72,3 +72,34 @@ def test_every_claim_grades_both_ems_and_is_pending_without_data():
     assert all(claim.verdict == "pending" and claim.why.startswith("Needs ") for claim in evaluated)
     assert all("\n" not in claim.why for claim in evaluated)  # one cause when both EMs miss the same data
 
+
+
+def test_the_refitted_model_is_graded_on_the_refits_within_their_noise():
+    """§VII's invariant model: the split mesh's refit within the seeds' band is reproduced, beyond it not."""
+    authors = resampling_rows(0.01, 1e-15)
+    authors[1] = {**authors[1], "eval_gap": "-0.01"}
+    rows = authors + resampling_rows(0.1, 1e-15, "textbook")
+    claim = theory.refitted_model_invariant(Measurements(resampling=rows))
+    # authors: +0.01 and -0.01, mean 0 inside its band; textbook: +0.1 twice, no spread, outside any band
+    assert verdicts(claim) == {"authors": "reproduced", "textbook": "not reproduced"}
+    assert "Not measured" in claim.grades["textbook"].why and "+0.100 ± 0.000" in claim.evidence
+    assert theory.refitted_model_invariant(Measurements()).verdict == "pending"
+
+
+def integral_row(identity, difference, noise):
+    return {"identity": identity, "cases": "948", "max_error": str(difference), "scale": "7.6", "noise": str(noise),
+            "detail": "eq. 8 7.6, Monte Carlo 7.6"}
+
+
+def test_a_closed_form_is_graded_against_its_monte_carlo_integral_within_its_noise():
+    """Within 1.96 standard errors: reproduced; beyond: not; the eq. 11 claim names the printed Σ_p."""
+    inside = theory.triangle_bound_is_the_integral(Measurements(identities=[
+        integral_row("triangle_bound_monte_carlo", 0.0019, 0.001)]))
+    outside = theory.triangle_bound_is_the_integral(Measurements(identities=[
+        integral_row("triangle_bound_monte_carlo", 0.0021, 0.001)]))
+    assert inside.verdict == "reproduced" and outside.verdict == "not reproduced"
+    assert "2.1 standard errors" in outside.grades["authors"].why
+    general = theory.general_bound_is_the_integral(Measurements(identities=[
+        integral_row("general_bound_monte_carlo", 0.0, 0.001)]))
+    assert general.verdict == "reproduced" and "subtracts Σ_p" in general.evidence
+    assert theory.triangle_bound_is_the_integral(Measurements()).verdict == "pending"

@@ -23,7 +23,8 @@ with threadpool_limits(smk.threads):
     mixture = GaussianMixture(p.checks["mixture_components"], max_iter=p.max_iter, random_state=seed).fit(
         Primitives.from_mesh(vertices, faces))
     rows = identity_rows(vertices, faces, mixture, random_triangles=p.checks["random_triangles"],
-                         n_components=p.checks["components"], n_iter=p.max_iter, reg_covar=p.reg_covar, seed=seed)
+                         n_components=p.checks["components"], n_iter=p.max_iter, reg_covar=p.reg_covar,
+                         samples=p.checks["samples"], seed=seed)
 write_csv(smk.output.rows, rows, COLUMNS)
 for row in rows:
     print(f"{row['identity']}: {row['cases']} cases, largest difference {row['max_error']:.2e} of {row['scale']:.2e}",

@@ -1,20 +1,26 @@
 """Identities the paper states, each side computed independently: dgmm's code against the formula of the cited source.
 
-- ``cgal_triangle_moment`` (§III): the triangle covariance of eq. 13, ``cov(△) = (A Aᵀ + B Bᵀ + C Cᵀ − 3 μ μᵀ) / 12``
+- ``cgal_triangle_moment`` (§III): the triangle covariance of eq. 10, ``cov(△) = (A Aᵀ + B Bᵀ + C Cᵀ − 3 μ μᵀ) / 12``
   (:mod:`dgmm.primitives`), "is consistent with the standard formulation in CGAL": CGAL's
   ``linear_least_squares_fitting_3`` takes a triangle's second moment about the origin as ``2 area V M Vᵀ``, ``V``
   the matrix of its vertex columns and ``M`` :data:`CGAL_TRIANGLE_MOMENT`, "a 5x multiple of the one for 3D
   tetrahedrons" (:data:`CGAL_TETRAHEDRON_MOMENT`), and its covariance as that moment over the area less ``c cᵀ``;
-- ``mean_update_exact_equals_approx`` (§III): from the same responsibilities, the exact M-step's means (eq. 12) are the
+- ``mean_update_exact_equals_approx`` (§III): from the same responsibilities, the exact M-step's means (eq. 9) are the
   area × centroid approximation's (eq. 5), and its covariances exceed the approximation's by the
-  responsibility-weighted triangle covariance (eq. 13's ``cov(△)`` term);
-- ``hierarchical_gmm_update`` (§V-A): the general M-step (eqs. 15-16) on a mixture's own components (means,
+  responsibility-weighted triangle covariance (eq. 10's ``cov(△)`` term);
+- ``hierarchical_gmm_update`` (§V-A): the general M-step (eqs. 12-13) on a mixture's own components (means,
   covariances, sizes its weights) is the hierarchical-GMM M-step of Vasconcelos & Lippman (1998),
   ``μ = Σ h w μ_p / Σ h w``, ``Σ = Σ h w (Σ_p + (μ_p − μ)(μ_p − μ)ᵀ) / Σ h w``, ``π = Σ h w / Σ w``, for the same
   responsibilities ``h`` (their E-step raises each component's term to the power of its virtual samples ``N w_p``,
   ours to 1: the identity is the M-step's);
 - ``points_equal_sklearn`` (§VII, "empirical equivalence with traditional techniques"): EM on points (zero
-  covariance, unit size) is scikit-learn's ``GaussianMixture`` from the same start, iteration for iteration.
+  covariance, unit size) is scikit-learn's ``GaussianMixture`` from the same start, iteration for iteration;
+- ``triangle_bound_monte_carlo`` (§III, eq. 8): the triangle bound as printed, in the vertices ``A, B, C``, is the
+  area-weighted integral ``Σ_j α_j Σ_i η_ij E_{x~△j}[log λ_i N(x; μ_i, Σ_i)]`` that it closes, here integrated by
+  sampling each triangle uniformly;
+- ``general_bound_monte_carlo`` (§V-A, eq. 11): the general bound on Gaussian primitives, read with
+  ``tr(Σ_i⁻¹ Σ_p)`` where the printed bracket subtracts the matrix ``Σ_p``, is the same integral under each
+  primitive's Gaussian; its detail gives the nearest literal reading, ``tr(Σ_p)``, beside it.
 
 dgmm's M-step is not public: one EM iteration of :class:`dgmm.GaussianMixture` from given parameters
 (``max_iter=1, tol=None``) is one E-step under them and one M-step. The reference sides take their responsibilities
@@ -25,7 +31,8 @@ component and leaves the softmax unchanged.
 
 A row (:data:`COLUMNS`) compares several quantities; ``max_error`` and ``scale`` are those of the quantity with the
 largest relative difference (``scale`` the largest magnitude of its reference side), and ``detail`` lists every
-quantity's. ``cases`` counts what was compared (triangles, or components).
+quantity's. ``cases`` counts what was compared (triangles, or components). ``noise`` is 0 for an identity, which holds
+to rounding, and the standard error of the Monte Carlo side for an integral, which holds within its noise.
 """
 import warnings
 
@@ -37,7 +44,7 @@ from sklearn.mixture import GaussianMixture as SklearnGaussianMixture
 from dgmm.mixture import GaussianMixture
 from dgmm.primitives import Primitives
 
-COLUMNS = ("identity", "cases", "max_error", "scale", "detail")
+COLUMNS = ("identity", "cases", "max_error", "scale", "detail", "noise")
 CGAL_TRIANGLE_MOMENT = np.array([[1 / 12, 1 / 24, 1 / 24],
                                  [1 / 24, 1 / 12, 1 / 24],
                                  [1 / 24, 1 / 24, 1 / 12]])
@@ -62,7 +69,8 @@ def comparison_row(identity, cases, quantities):
                        float(np.max(np.abs(reference))))
     worst = max(found, key=lambda name: _relative(*found[name]))
     return {"identity": identity, "cases": cases, "max_error": found[worst][0], "scale": found[worst][1],
-            "detail": "; ".join(f"{name} {error:.1e} of {scale:.1e}" for name, (error, scale) in found.items())}
+            "detail": "; ".join(f"{name} {error:.1e} of {scale:.1e}" for name, (error, scale) in found.items()),
+            "noise": 0.0}
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -85,7 +93,7 @@ def cgal_moments(triangles, moment=CGAL_TRIANGLE_MOMENT):
 
 
 def triangle_covariances(triangles):
-    """Eq. 13's ``cov(△) = (A Aᵀ + B Bᵀ + C Cᵀ − 3 μ μᵀ) / 12`` of (n, 3, 3) vertex rows, as the paper writes it."""
+    """Eq. 10's ``cov(△) = (A Aᵀ + B Bᵀ + C Cᵀ − 3 μ μᵀ) / 12`` of (n, 3, 3) vertex rows, as the paper writes it."""
     centroids = triangles.mean(axis=1)
     return (np.einsum("nvi,nvj->nij", triangles, triangles)
             - 3 * centroids[:, :, None] * centroids[:, None, :]) / 12
@@ -102,7 +110,7 @@ def reference_responsibilities(weights, means, covariances, prim_means, prim_cov
 
 
 def weighted_update(h, sizes, prim_means, prim_covariances):
-    """The M-step of Vasconcelos & Lippman's hierarchical GMM (eqs. 15-16 in the paper's notation): weights
+    """The M-step of Vasconcelos & Lippman's hierarchical GMM (eqs. 12-13 in the paper's notation): weights
     ``Σ_p h w / Σ w``, means and covariances ``Σ_p h w (Σ_p + (μ_p − μ)(μ_p − μ)ᵀ) / Σ_p h w``."""
     w = h * sizes[:, None]  # (n_prims, K)
     mass = w.sum(axis=0)
@@ -162,7 +170,7 @@ def _start(rng, means, n_components, spread):
 
 def mean_update_exact_equals_approx(vertices, faces, n_components, rng):
     """One M-step on a mesh's exact triangles and on its area × centroid approximation from the same
-    responsibilities (every component starts with one shared covariance), against the formulas (eqs. 5, 12, 13).
+    responsibilities (every component starts with one shared covariance), against the formulas (eqs. 5, 9, 10).
 
     The reference responsibilities are those of the centroids (zero covariance): under a shared covariance the
     triangles' trace term is the same for every component, so the exact E-step's responsibilities are the same.
@@ -220,7 +228,79 @@ def points_equal_sklearn(points, n_components, n_iter, reg_covar, rng):
         "covariances": (ours.covariances_, reference.covariances_), "weights": (ours.weights_, reference.weights_)})
 
 
-def identity_rows(vertices, faces, mixture, *, random_triangles, n_components, n_iter, reg_covar, seed):
+def _log_densities(points, weights, means, covariances):
+    """``log λ_i + log N(x; μ_i, Σ_i)`` with scipy's density, shape (n_points, K)."""
+    return np.stack([np.log(weight) + multivariate_normal.logpdf(points, mean, covariance)
+                     for weight, mean, covariance in zip(weights, means, covariances)], axis=1)
+
+
+def _monte_carlo_bound(samples, h, sizes, weights, means, covariances):
+    """Size-weighted mean over primitives of ``Σ_i h_pi (log λ_i + log N(x; μ_i, Σ_i))`` averaged over each
+    primitive's samples (n_prims, m, 3), and its standard error (the samples' spread within each primitive)."""
+    n_prims, m, dim = samples.shape
+    share = sizes / sizes.sum()
+    values = np.einsum("pmk,pk->pm", _log_densities(samples.reshape(-1, dim), weights, means, covariances)
+                       .reshape(n_prims, m, -1), h)
+    return float(share @ values.mean(axis=1)), float(np.sqrt(share ** 2 @ values.var(axis=1, ddof=1) / m))
+
+
+def _integral_row(identity, cases, closed, sampled, error, detail):
+    """A row comparing a closed form with its Monte Carlo integral (``noise`` the integral's standard error)."""
+    return {"identity": identity, "cases": cases, "max_error": abs(closed - sampled), "scale": abs(sampled),
+            "detail": detail, "noise": error}
+
+
+def triangle_bound_monte_carlo(vertices, faces, mixture, samples, rng):
+    """Eq. 8 as printed (per unit area) for ``mixture`` and its textbook responsibilities on a mesh's triangles,
+    against ``samples`` uniform points a triangle."""
+    triangles = _mesh_triangles(vertices, faces)
+    centroids, areas = triangles.mean(axis=1), triangle_areas(triangles)
+    weights, means, covariances = mixture.weights_, mixture.means_, mixture.covariances_
+    h = reference_responsibilities(weights, means, covariances, centroids, triangle_covariances(triangles))
+    precisions = np.linalg.inv(covariances)
+    offsets = centroids[:, None, :] - means[None]  # (n, K, 3)
+    quadratic = np.einsum("nki,kij,nkj->nk", offsets, precisions, offsets)
+    vertex_terms = (np.einsum("nvi,kij,nvj->nk", triangles, precisions, triangles)
+                    - 3 * np.einsum("ni,kij,nj->nk", centroids, precisions, centroids))
+    bracket = (2 * np.log(weights) - 3 * np.log(2 * np.pi) - np.linalg.slogdet(covariances)[1]
+               - quadratic - vertex_terms / 12)
+    closed = float(0.5 * np.sum(h * areas[:, None] * bracket) / areas.sum())
+    u = rng.random((len(triangles), samples, 2))
+    u = np.where(u.sum(axis=2, keepdims=True) > 1, 1 - u, u)  # reflected into the triangle: uniform over it
+    edges = triangles[:, 1:] - triangles[:, :1]  # (n, 2, 3)
+    points = triangles[:, None, 0] + np.einsum("nmb,nbi->nmi", u, edges)
+    sampled, error = _monte_carlo_bound(points, h, areas, weights, means, covariances)
+    return _integral_row("triangle_bound_monte_carlo", len(triangles), closed, sampled, error,
+                         f"eq. 8 {closed:.6f}, Monte Carlo {sampled:.6f} ± {error:.6f} nat ({samples} uniform points "
+                         f"a triangle)")
+
+
+def general_bound_monte_carlo(mixture, n_components, samples, rng):
+    """Eq. 11 (per unit size) on the components of ``mixture`` as Gaussian primitives, read with ``tr(Σ_i⁻¹ Σ_p)``,
+    against ``samples`` draws from each primitive; the detail adds the printed ``Σ_p`` read as ``tr(Σ_p)``."""
+    child = Primitives.from_gaussians(mixture.means_, mixture.covariances_, mixture.weights_)
+    spread = np.cov(child.means.T) / n_components ** (2 / 3)
+    weights, means, covariances = _start(rng, child.means, n_components,
+                                         spread * rng.uniform(0.5, 2.0, n_components)[:, None, None])
+    h = reference_responsibilities(weights, means, covariances, child.means, child.covariances)
+    offsets = child.means[:, None, :] - means[None]
+    quadratic = np.einsum("pki,kij,pkj->pk", offsets, np.linalg.inv(covariances), offsets)
+    common = (2 * np.log(weights) - 3 * np.log(2 * np.pi) - np.linalg.slogdet(covariances)[1] - quadratic)
+
+    def bound(extent):  # eq. 11 with the bracket's last term read as ``extent`` (n_prims, K)
+        return float(0.5 * np.sum(h * child.weights[:, None] * (common - extent)) / child.weights.sum())
+
+    closed = bound(np.einsum("kij,pji->pk", np.linalg.inv(covariances), child.covariances))
+    printed = bound(np.trace(child.covariances, axis1=1, axis2=2)[:, None])
+    draws = np.stack([rng.multivariate_normal(mean, covariance, samples)
+                      for mean, covariance in zip(child.means, child.covariances)])
+    sampled, error = _monte_carlo_bound(draws, h, child.weights, weights, means, covariances)
+    return _integral_row("general_bound_monte_carlo", len(child.means), closed, sampled, error,
+                         f"eq. 11 read with tr(Σᵢ⁻¹Σ_p) {closed:.6f}, as printed (−Σ_p read as −tr Σ_p) {printed:.6f}, "
+                         f"Monte Carlo {sampled:.6f} ± {error:.6f} nat ({samples} draws a primitive)")
+
+
+def identity_rows(vertices, faces, mixture, *, random_triangles, n_components, n_iter, reg_covar, samples, seed):
     """Every identity of the module docstring on one mesh and a mixture fitted to it.
 
     Parameters
@@ -237,6 +317,8 @@ def identity_rows(vertices, faces, mixture, *, random_triangles, n_components, n
         EM iterations of the scikit-learn comparison.
     reg_covar : float
         Covariance floor of the scikit-learn comparison (both sides).
+    samples : int
+        Monte Carlo points a primitive of the two integrals.
     seed : int
         Seeds every random start and the random triangles.
 
@@ -249,4 +331,6 @@ def identity_rows(vertices, faces, mixture, *, random_triangles, n_components, n
     return [cgal_triangle_moment(vertices, faces, random_triangles, rng), cgal_five_times_tetrahedron(),
             mean_update_exact_equals_approx(vertices, faces, n_components, rng),
             hierarchical_gmm_update(mixture, n_components, rng),
-            points_equal_sklearn(vertices, n_components, n_iter, reg_covar, rng)]
+            points_equal_sklearn(vertices, n_components, n_iter, reg_covar, rng),
+            triangle_bound_monte_carlo(vertices, faces, mixture, samples, rng),
+            general_bound_monte_carlo(mixture, n_components, samples, rng)]

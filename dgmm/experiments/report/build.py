@@ -214,11 +214,11 @@ FIGURES = (
     FigureSpec("fig1", "Fig 1: triangles and their covariances", ("res4",), (),
                lambda data: figures.fig1_triangles(data.meshes),
                "Bunny res4 (left) and the triangles of its head (right), each with the ellipse of its covariance "
-               f"(the uniform distribution over the triangle, eq. 9) drawn at {figures.N_SIGMA}σ."),
+               f"(the uniform distribution over the triangle, eq. 10) drawn at {figures.N_SIGMA}σ."),
     FigureSpec("fig2", "Fig 2: likelihood expressions agree", ("fig2",), (),
                lambda data: figures.fig2_expressions(data.fig2),
                "One GMM fitted to dense samples of bunny res4, scored by each expression. **Bars**: the paper's "
-               "quantity Σᵢ ηᵢₚ log ρᵢₚ per unit size; orange the mesh expressions (triangle: eq. 11), blue n sampled "
+               "quantity Σᵢ ηᵢₚ log ρᵢₚ per unit size; orange the mesh expressions (triangle: eq. 8), blue n sampled "
                "points (±1 std over draws). **Diamonds**: our EM bound (with the entropy). **Red lines**: all the "
                "fitted points (solid: the paper's quantity, dashed: mean log-likelihood). The y axis does not start "
                "at zero."),
