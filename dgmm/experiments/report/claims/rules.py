@@ -45,6 +45,10 @@ SIMILAR_TIME = (0.78, 1.28)
 """Time ratios the paper's "similar", "approximately match" and "roughly match" allow: closer than the 22% that
 §VI-D reports as a difference ("22% faster", a time ratio of 0.78), either way (1 / 0.78 ≈ 1.28). A ratio beyond
 the upper end is "much faster"."""
+SIGNIFICANT = SIMILAR_TIME[0]
+"""What "significantly" needs beyond the noise (§VI-C's "often significantly"): a practical size, the same 22% the
+report reads as a difference: a mean error below 0.78 of the other's, or a per-sample likelihood above 1 / 0.78 of the
+other's (a mean log-likelihood margin above log(1 / 0.78) ≈ 0.25 nat). The paper's own Table 1 margins pass both."""
 
 
 SECTION_TITLES = {

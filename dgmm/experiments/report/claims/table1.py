@@ -2,15 +2,18 @@
 
 Likelihood comparisons take their tie band from the seed-to-seed spread of the fits (likelihood.csv); registration
 comparisons from the paired bootstrap over each model's trials (registration.csv: every method registers the same
-trials). "Significantly" is read as beyond that band: the paper gives no size for it.
+trials). "Significantly" is read as beyond that band and beyond a practical size, the 22% the report reads as a
+difference (:data:`~.rules.SIGNIFICANT`): the paper gives no size for it, and its own margins pass that one.
 """
+import math
+
 import numpy as np
 
 from dgmm.experiments.report import paper
 from dgmm.experiments.report.claims.grading import (EVERY, LOSS, OFTEN_WORDS, PLAIN, TIE, WIN, bootstrap, compare,
                                                     paired_difference, versus_paper)
-from dgmm.experiments.report.claims.rules import (ERROR_NAMES, TEXT, WORDS, WRONG_MINIMUM_DEG, Cause, Claim, conjoined,
-                                                  fitted_variant, graded_share, missing, per_variant, unwon,
+from dgmm.experiments.report.claims.rules import (ERROR_NAMES, SIGNIFICANT, TEXT, WORDS, WRONG_MINIMUM_DEG, Cause, Claim,
+                                                  conjoined, fitted_variant, graded_share, missing, per_variant, unwon,
                                                   wrong_minima)
 from dgmm.experiments.report.tables import FIG6_MESH, TABLE1_FIT, TABLE1_INPUTS, TABLE1_METHODS, table1_mesh
 
@@ -70,10 +73,17 @@ def _graded(data, args, rule, comparisons_of, quantifier, table, paper_words, so
 
 # likelihood ----------------------------------------------------------------------------------------------------
 
-def _likelihood_margins(data, variant):
-    """Per model: mesh − points mean evaluation log-likelihood, its band from both fits' seed spreads."""
-    return [compare(model, fits["mesh"] - fits["points"], detail=f"{(fits['mesh'] - fits['points']).value:+.2f}")
-            for model, fits in _likelihoods(data, variant).items()]
+SIGNIFICANT_NAT = math.log(1 / SIGNIFICANT)
+"""A significant likelihood margin's practical size: the per-sample likelihood above 1 / 0.78 of the other's."""
+
+
+def _likelihood_margins(data, variant, significant=False):
+    """Per model: mesh − points mean evaluation log-likelihood, its band from both fits' seed spreads (and at least
+    :data:`SIGNIFICANT_NAT` when ``significant``)."""
+    return [compare(model, margin, band=max(margin.band, SIGNIFICANT_NAT) if significant else None,
+                    detail=f"{margin.value:+.2f}")
+            for model, margin in ((model, fits["mesh"] - fits["points"])
+                                  for model, fits in _likelihoods(data, variant).items())]
 
 
 def _likelihood_table(data, variant):
@@ -100,10 +110,12 @@ def likelihood_margins(data):
     """§VI-C: the mesh-based GMM outperformed the point-based one, "often significantly" (likelihood)."""
     margins = [row[COLUMNS["ll", "mesh"]] - row[COLUMNS["ll", "points"]] for row in paper.TABLE1.values()]
     return _graded(data, ("§VI-C", "Table 1", "The likelihood margins are often significant"),
-                   "share, often: one model, mesh > points likelihood beyond the band (seed spread)",
-                   lambda variant: _likelihood_margins(data, variant), OFTEN_WORDS,
+                   f"share, often: one model, mesh − points likelihood beyond the band (seed spread) and beyond "
+                   f"{SIGNIFICANT_NAT:.2f} nat (a per-sample likelihood 1 / {SIGNIFICANT} times the other's)",
+                   lambda variant: _likelihood_margins(data, variant, significant=True), OFTEN_WORDS,
                    lambda variant: "mesh − points " + ", ".join(
-                       f"{c.label} {c.margin:+.2f} ± {c.band:.2f}" for c in _likelihood_margins(data, variant)),
+                       f"{c.label} {c.margin:+.2f} (needs > {c.band:.2f})"
+                       for c in _likelihood_margins(data, variant, significant=True)),
                    "often significantly (margins " + ", ".join(f"{m:+.1f}" for m in margins) + ")", TEXT, LIKELIHOODS,
                    _fitted_better)
 
@@ -141,12 +153,21 @@ def likelihood_values(data):
 
 # registration --------------------------------------------------------------------------------------------------
 
-def _mesh_below(data, variant, others):
+def _mesh_below(data, variant, others, significant=False, kind="mesh"):
     """Comparisons per (model, error, other of ``others``): the mesh GMM's mean error below the other's over the
-    same trials."""
-    return [compare(f"{model} {ERROR_NAMES[name]} vs {OTHER_NAMES[other]}",
-                    paired_difference(trials["mesh"][name], trials[other][name]), higher=False)
-            for model, trials in _trials(data, variant).items() for name in ERROR_NAMES for other in others]
+    same trials (and below :data:`~.rules.SIGNIFICANT` of it when ``significant``); ``kind`` "mesh_c2f" takes the
+    coarse-to-fine P2D's trials on the same mixture in the mesh GMM's place."""
+    comparisons = []
+    for model, trials in _trials(data, variant).items():
+        if trials.get(kind) is None:
+            continue
+        for name in ERROR_NAMES:
+            for other in others:
+                difference = paired_difference(trials[kind][name], trials[other][name])
+                practical = (1 - SIGNIFICANT) * float(np.mean(trials[other][name])) if significant else 0.0
+                comparisons.append(compare(f"{model} {ERROR_NAMES[name]} vs {OTHER_NAMES[other]}", difference,
+                                           higher=False, band=max(difference.band, practical)))
+    return comparisons
 
 
 def _percent_table(data, variant):
@@ -165,22 +186,15 @@ def _percent_table(data, variant):
     return f"% of ICP, mesh / points: {cells}" + "".join(f" ({note})" for note in notes)
 
 
-def _c2f_wins(data, variant, label):
-    """Whether the coarse-to-fine P2D on the same mixture wins the comparison ``label`` ("model error vs other")."""
-    model, name = label.split()[:2]
-    other = next(kind for kind, other_name in OTHER_NAMES.items() if label.endswith(other_name))
-    trials = _trials(data, variant)[model]
-    key = next(key for key, error_name in ERROR_NAMES.items() if error_name == name)
-    return trials.get("mesh_c2f") is not None and compare(
-        label, paired_difference(trials["mesh_c2f"][key], trials[other][key]), higher=False).outcome == WIN
-
-
-def _registration_cause(data, variant, comparisons):
+def _registration_cause(data, variant, comparisons, significant=False):
     """Cause of registration comparisons not won: wrong local minima of the paper's P2D when the coarse-to-fine P2D
-    on the same mixture and trials wins them (naming the models' trials stuck in one), else not found."""
+    on the same mixture and trials wins them under the same rule (naming the models' trials stuck in one), else not
+    found."""
     unsettled = [c for c in comparisons if c.outcome != WIN]
     labels = ", ".join(c.label for c in unsettled)
-    if not (unsettled and all(_c2f_wins(data, variant, c.label) for c in unsettled)):
+    c2f_won = {c.label for c in _mesh_below(data, variant, tuple(OTHER_NAMES), significant, kind="mesh_c2f")
+               if c.outcome == WIN}
+    if not (unsettled and all(c.label in c2f_won for c in unsettled)):
         return Cause("Cause not found (tried: the coarse-to-fine P2D on the same mixture and trials).",
                      f"not found for {labels}")
     noun = "tie" if all(c.outcome == TIE for c in unsettled) else "comparison"
@@ -203,11 +217,10 @@ def _registration_cause(data, variant, comparisons):
 
 def mesh_registers_better(data):
     """§VI-C: "In all our experiments, the mesh-based GMM always outperformed the point-based one" (registration;
-    Table 1 also puts every mesh GMM error below ICP's 100%)."""
-    return _graded(data, ("§VI-C", "Table 1", "The mesh GMM registers better than the points GMM and ICP on every "
-                          "model"),
-                   "share, every: one (model, error, other), mesh mean error < the points GMM's, ICP's (band: paired "
-                   "bootstrap)", lambda variant: _mesh_below(data, variant, tuple(OTHER_NAMES)), EVERY,
+    the paper's words name the points GMM only)."""
+    return _graded(data, ("§VI-C", "Table 1", "The mesh GMM registers better than the points GMM on every model"),
+                   "share, every: one (model, error), mesh mean error < the points GMM's (band: paired bootstrap)",
+                   lambda variant: _mesh_below(data, variant, ("points",)), EVERY,
                    lambda variant: _percent_table(data, variant), "always", WORDS, ERRORS,
                    lambda variant, comparisons: _registration_cause(data, variant, comparisons))
 
@@ -217,11 +230,12 @@ def registration_margins(data):
     ratios = [paper.TABLE1[m][COLUMNS[name, "mesh"]] / paper.TABLE1[m][COLUMNS[name, "points"]]
               for m in paper.TABLE1 for name in ERROR_NAMES]
     return _graded(data, ("§VI-C", "Table 1", "The registration margins over the points GMM are often significant"),
-                   "share, often: one (model, error), mesh mean error < the points GMM's beyond the band (paired "
-                   "bootstrap)", lambda variant: _mesh_below(data, variant, ("points",)), OFTEN_WORDS,
+                   f"share, often: one (model, error), mesh mean error below the points GMM's beyond the band (paired "
+                   f"bootstrap) and below {SIGNIFICANT} of it",
+                   lambda variant: _mesh_below(data, variant, ("points",), significant=True), OFTEN_WORDS,
                    lambda variant: _percent_table(data, variant),
                    f"often significantly (mesh / points {min(ratios):.2f} to {max(ratios):.2f})", TEXT, ERRORS,
-                   lambda variant, comparisons: _registration_cause(data, variant, comparisons))
+                   lambda variant, comparisons: _registration_cause(data, variant, comparisons, significant=True))
 
 
 def _icp_cause(data, variant, comparisons):
