@@ -7,9 +7,9 @@ from scipy.stats import binom
 
 from dgmm.experiments.report.claims.grading import (EVERY, INCONCLUSIVE, LOSS, NOT, OFTEN_WORDS, PARTLY, PLAIN,
                                                     REPRODUCED, TIE, TIMING_NOISE, WIN, Estimate, Tally, TimeRatio,
-                                                    bootstrap, compare, estimate, grade_share, grade_time, magnitude,
-                                                    median_interval, paired_difference, same_protocol_error,
-                                                    versus_paper, within)
+                                                    bootstrap, compare, estimate, grade_share, grade_time, inside,
+                                                    magnitude, median_interval, paired_difference,
+                                                    same_protocol_error, versus_paper, within)
 
 
 def outcomes(wins, ties, losses):
@@ -137,9 +137,14 @@ def test_unequal_standard_errors_against_the_paper():
     assert math.isclose(paper_error.error, 0.1 * math.sqrt(10))
     assert versus_paper("x", ours, 10.6, 1).outcome == LOSS
     assert versus_paper("x", ours, 10.6, 1, paper_error=paper_error).outcome == WIN
-    # a verbal value ("about three") has no error: only ours and the rounding, 1.96·0.1 + 0.5 = 0.696
-    assert versus_paper("x", Estimate(3.69, 0.1), 3, 0, paper_error=Estimate(0.0)).outcome == WIN
-    assert versus_paper("x", Estimate(3.70, 0.1), 3, 0, paper_error=Estimate(0.0)).outcome == LOSS
+
+
+def test_a_verbal_range_needs_the_whole_band_inside_to_win_and_outside_to_lose():
+    # "about three": 2.5 to 3.5. Band 1.96·0.1 = 0.196: 3.3 ± 0.196 inside (won), 3.4 ± 0.196 across 3.5 (tied),
+    # 3.7 ± 0.196 wholly above (lost); a wide band (4.4 ± 2.0) across the range cannot tell.
+    outcomes = [inside("x", Estimate(value, error), 2.5, 3.5).outcome
+                for value, error in ((3.3, 0.1), (3.4, 0.1), (3.7, 0.1), (4.4, 1.0), (2.0, 0.1))]
+    assert outcomes == [WIN, TIE, LOSS, TIE, LOSS]
 
 
 def test_paired_difference_over_trials():

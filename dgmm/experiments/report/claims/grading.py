@@ -130,6 +130,13 @@ def within(label, value, target, margin, *, detail=""):
     return Comparison(label, margin - abs(value - target), 0.0, detail)
 
 
+def inside(label, ours, low, high, *, detail=""):
+    """Equivalence of ``ours`` (an :class:`Estimate`) with a range the paper's words give ("about three": 2.5 to
+    3.5): won when its whole tie band lies inside, lost when the band lies wholly outside, tied otherwise."""
+    return Comparison(label, min(ours.value - low, high - ours.value), ours.band,
+                      detail or f"ours {ours.value:.1f} ± {ours.band:.1f}, paper {low:g} to {high:g}")
+
+
 def versus_paper(label, ours, published, decimals, *, paper_error=None, detail=""):
     """Equivalence of ``ours`` (an :class:`Estimate`) with a published value printed to ``decimals`` places: within
     the tie band of the difference of the two plus half the paper's last printed digit. The paper's standard error is
