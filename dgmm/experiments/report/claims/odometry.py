@@ -250,6 +250,16 @@ def d2d_faster_with_pixels(data):
     return beside(claim, data, check, ("pixels", "points"), "ours (Gauss-Newton)")
 
 
+def d2d_faster_by_22_percent(data):
+    """§VI-D's magnitude, "22% faster": the time ratio pixels / points at 0.78, to the paper's printed digit (21.5%
+    to 22.5% faster)."""
+    check = "d2d primitives"
+    return timing_claim(data, "§VI-D", "", "D2D between GMMs of pixel primitives is 22% faster than of plain points",
+                        check, ("pixels bfgs", "points bfgs"), (0.775, 0.785), "22% faster", TEXT,
+                        _iteration_cause(data, check, ("pixels bfgs", "points bfgs"),
+                                         "each evaluates the same K × K component pairs"))
+
+
 def gmm_runtime_matches_icp(data):
     """Fig 7's caption: "Runtime for both methods was similar" (GMM D2D with pixel primitives and ICP on "2,500
     points randomly sampled from each point cloud (selected to roughly match the run-time performance of our
@@ -270,5 +280,5 @@ def determinant_free_faster(data):
                                          "each evaluation with it adds a 3 × 3 determinant per pair"))
 
 
-CLAIMS = (pixels_beat_points, on_authors_protocol(pixels_beat_points), paper_sequence_values, d2d_faster_with_pixels, gmm_runtime_matches_icp,
-          determinant_free_faster)
+CLAIMS = (pixels_beat_points, on_authors_protocol(pixels_beat_points), paper_sequence_values, d2d_faster_with_pixels,
+          d2d_faster_by_22_percent, gmm_runtime_matches_icp, determinant_free_faster)
