@@ -175,3 +175,25 @@ def test_largely_invariant_needs_the_mesh_itself_invariant_not_only_below_the_po
     assert "quadric1000-exact K=25 invariant: +0.200 ± 0.304" in invariant.evidence
     moved = claim(7.5)  # still below the points' gap (won), but not invariant in itself (lost): 1 of 2
     assert moved.verdict == "not reproduced" and moved.grades["authors"].ours == "1/2 won"
+
+
+def fig5_rows(exact_ll, exact_coverage):
+    """convergence.csv rows at Fig 5's K=100, k-means: centroids at 7.0 and 70% coverage; the exact mesh's given
+    (two seeds each, 0.02 apart: a small tie band)."""
+    rows = []
+    for name, variants, ll, coverage in (("res4-centroids", ("textbook",), 7.0, 0.7),
+                                         ("res4-exact", ("authors", "textbook"), exact_ll, exact_coverage)):
+        for variant in variants:
+            for seed, offset in enumerate((0.0, 0.02)):
+                rows.append({"input": name, "variant": variant, "K": "100", "init": "kmeans", "seed": str(seed),
+                             "eval_ll_25": str(ll + offset), "coverage_2sigma": str(coverage + offset)})
+    return rows
+
+
+def test_a_fuller_model_at_a_similar_likelihood_needs_both():
+    """Fuller (coverage above the centroids') and very similar (likelihoods within ±0.25 nat, band inside)."""
+    assert fitting.fuller_model(Measurements(convergence=fig5_rows(7.05, 0.8))).verdict == "reproduced"
+    # 0.5 nat apart: a fuller model, but not at a similar likelihood -> 1 of 2, not every
+    claim = fitting.fuller_model(Measurements(convergence=fig5_rows(7.5, 0.8)))
+    assert claim.verdict == "not reproduced" and claim.grades["authors"].ours == "1/2 won"
+    assert "likelihood: exact − centroids +0.500 ± " in claim.evidence

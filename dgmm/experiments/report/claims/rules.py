@@ -11,6 +11,7 @@ Claims that involve no mixture fitted to a mesh get one verdict in both.
 A grade not reproduced names its cause in one sentence (``Grade.why``, for the summary table); the numbers behind
 it, the cells and what was tried, go to the claim's evidence (:class:`Cause`).
 """
+import math
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -49,6 +50,9 @@ SIGNIFICANT = SIMILAR_TIME[0]
 """What "significantly" needs beyond the noise (§VI-C's "often significantly"): a practical size, the same 22% the
 report reads as a difference: a mean error below 0.78 of the other's, or a per-sample likelihood above 1 / 0.78 of the
 other's (a mean log-likelihood margin above log(1 / 0.78) ≈ 0.25 nat). The paper's own Table 1 margins pass both."""
+SIGNIFICANT_NAT = math.log(1 / SIGNIFICANT)
+"""A practically significant likelihood margin, in nat: a per-sample likelihood 1 / 0.78 times the other's. Within
+it, likelihoods are "very similar"."""
 
 
 SECTION_TITLES = {

@@ -5,16 +5,14 @@ comparisons from the paired bootstrap over each model's trials (registration.csv
 trials). "Significantly" is read as beyond that band and beyond a practical size, the 22% the report reads as a
 difference (:data:`~.rules.SIGNIFICANT`): the paper gives no size for it, and its own margins pass that one.
 """
-import math
-
 import numpy as np
 
 from dgmm.experiments.report import paper
 from dgmm.experiments.report.claims.grading import (EVERY, LOSS, OFTEN_WORDS, PLAIN, TIE, WIN, bootstrap, compare,
                                                     paired_difference, versus_paper)
-from dgmm.experiments.report.claims.rules import (ERROR_NAMES, SIGNIFICANT, TEXT, WORDS, WRONG_MINIMUM_DEG, Cause, Claim,
-                                                  conjoined, fitted_variant, graded_share, missing, per_variant, unwon,
-                                                  wrong_minima)
+from dgmm.experiments.report.claims.rules import (ERROR_NAMES, SIGNIFICANT, SIGNIFICANT_NAT, TEXT, WORDS,
+                                                  WRONG_MINIMUM_DEG, Cause, Claim, conjoined, fitted_variant,
+                                                  graded_share, missing, per_variant, unwon, wrong_minima)
 from dgmm.experiments.report.tables import FIG6_MESH, TABLE1_FIT, TABLE1_INPUTS, TABLE1_METHODS, table1_mesh
 
 KINDS = ("points", "mesh")
@@ -72,10 +70,6 @@ def _graded(data, args, rule, comparisons_of, quantifier, table, paper_words, so
 
 
 # likelihood ----------------------------------------------------------------------------------------------------
-
-SIGNIFICANT_NAT = math.log(1 / SIGNIFICANT)
-"""A significant likelihood margin's practical size: the per-sample likelihood above 1 / 0.78 of the other's."""
-
 
 def _likelihood_margins(data, variant, significant=False):
     """Per model: mesh − points mean evaluation log-likelihood, its band from both fits' seed spreads (and at least
