@@ -4,9 +4,12 @@ verdict."""
 from pathlib import Path
 
 import numpy as np
+import pytest
 
+from dgmm.errors import DataError
 from dgmm.experiments.report.claims import odometry, registration, table1
 from dgmm.experiments.report.claims.measurements import Measurements
+from dgmm.experiments.report.tables import registration_errors
 
 BOTH = ("textbook", "authors")
 
@@ -39,6 +42,16 @@ def test_a_difference_within_the_trials_spread_is_a_tie_and_counts_neither_way()
     claim = registration.mesh_registers_best(Measurements(registration=rows))
     assert verdicts(claim) == {"authors": "inconclusive", "textbook": "inconclusive"}
     assert claim.grades["authors"].ours == "0/2 won, 2 tied"
+
+
+def test_trials_pair_by_id_and_a_method_missing_one_is_named():
+    """Rows in any order pair by trial id; a method that ran other trials cannot be paired."""
+    rows = (registration_rows("bunny", "res4", "mesh-kmeans", [1, 2, 3], [0.1] * 3)
+            + registration_rows("bunny", "res4", "icp", [2, 3, 4], [0.2] * 3))
+    errors = registration_errors(rows[::-1])
+    assert list(errors["bunny", "res4", "icp"]["rot"]) == [2, 3, 4]
+    with pytest.raises(DataError, match="registration.csv: bunny res4: methods icp, mesh-kmeans ran different trials"):
+        registration_errors([row for row in rows if not (row["method"] == "icp" and row["trial"] == "2")])
 
 
 def table1_rows(model, mesh, mesh_offsets, c2f_offset=None):

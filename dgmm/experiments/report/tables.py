@@ -16,6 +16,7 @@ from collections import defaultdict
 
 import numpy as np
 
+from dgmm.errors import DataError
 from dgmm.experiments.report import paper
 from dgmm.experiments.shared_responsibility import PER_POINT_MEASURE
 from dgmm.experiments.sweep import SIZED
@@ -123,6 +124,8 @@ def registration_errors(rows, protocol="scaled", variant="textbook"):
     A method's rows are those of the variant it runs under when ``variant`` is asked for
     (``dgmm.experiments.trials.method_variants``: ``variant`` for mesh mixtures, textbook for point mixtures, "none" for
     ICP and CPD). Rows without ``protocol`` or ``variant`` columns count as scaled trials run as under textbook EM.
+    Every method of a (model, mesh) has the same trial ids, so that comparisons pair the methods' trials by position
+    (sorted by id): a table where they differ is a :class:`~dgmm.errors.DataError` naming the model and methods.
 
     Returns
     -------
@@ -136,6 +139,14 @@ def registration_errors(rows, protocol="scaled", variant="textbook"):
         if (row.get("protocol", "scaled") == protocol
                 and row.get("variant", method_variants(method, ["textbook"])[0]) == own):
             groups[row["model"], row["mesh"], method].append(row)
+    ids = defaultdict(dict)
+    for (model, mesh, method), trials in groups.items():
+        ids[model, mesh][method] = sorted(int(row["trial"]) for row in trials)
+    for (model, mesh), by_method in ids.items():
+        if len({tuple(trial_ids) for trial_ids in by_method.values()}) > 1:
+            raise DataError(f"registration.csv: {model} {mesh}: methods {', '.join(sorted(by_method))} ran different "
+                            f"trials ({', '.join(f'{m} {len(t)}' for m, t in sorted(by_method.items()))}); their "
+                            f"trials cannot be paired")
     return {key: {name: np.array([float(row[column]) for row in sorted(trials, key=lambda row: int(row["trial"]))])
                   for name, column in ERRORS.items()} for key, trials in groups.items()}
 
