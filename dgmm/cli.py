@@ -380,7 +380,7 @@ def _view_arguments(parser):
 # odometry
 # ---------------------------------------------------------------------------------------------------------
 
-ODOMETRY_PROTOCOLS = ("ours", "authors-patch", "authors-disparity")
+ODOMETRY_PROTOCOLS = ("ours", "ours-unit", "authors-patch", "authors-disparity")
 """``dgmm.odometry.protocols.PROTOCOLS``' names, written out: importing it would load the odometry package at start."""
 
 
@@ -471,7 +471,8 @@ def _odometry_arguments(parser):
                              "once; textbook and the authors' EM are then one algorithm) or area (its footprint, "
                              "the sweep's: textbook EM then drifts more under fast turns) (default: %(default)s)")
     parser.add_argument("--protocol", choices=ODOMETRY_PROTOCOLS, default="ours",
-                        help="ours: --schedule, --variant and pixel rectangles sized by their footprint; "
+                        help="ours: --schedule, --variant and pixel rectangles sized by their footprint; ours-unit: "
+                             "ours with pixels of size 1 under textbook EM; "
                              "authors-patch, authors-disparity: the authors' notebooks (gmm-pixels of size 1, flat "
                              "patch or disparity-box covariance, scikit-learn GaussianMixture(100) defaults, BFGS "
                              "D2D; ~10x the CPU per frame; --schedule and --variant unused; authors-patch also runs "

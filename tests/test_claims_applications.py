@@ -197,6 +197,26 @@ def test_odometry_ties_come_from_the_seed_spread():
     assert claim.grades["authors"].ours == "1/2 won, 1 tied" and "over 2 seeds" in claim.evidence
 
 
+def test_a_textbook_pixel_loss_is_switched_by_the_unit_size_run():
+    """Synthetic: textbook EM's pixels 0.080 m lose to the points' 0.040 (band 2.31·√(0.0091² + 0.0046²) = 0.024);
+    the authors' EM's 0.020 wins. The unit-size run (ours-unit) at 0.030 no longer loses (tied, band 0.013): the
+    cause is measured; at 0.090 it still loses: not the areas; without it: not measured."""
+    rows = [{"sequence": "synthetic", "method": method, "variant": variant, "schedule": "overlap", "frames": "10",
+             "ate_rmse_m": str(ate), "missing_folder": "", "protocol": "ours"}
+            for method, variant, ate in (("gmm-pixels", "textbook", 0.080), ("gmm-pixels", "authors", 0.020),
+                                         ("gmm-points", "textbook", 0.040))]
+
+    def why(unit_ate=None):
+        unit = [] if unit_ate is None else [{**rows[0], "protocol": "ours-unit", "ate_rmse_m": str(unit_ate)}]
+        claim = odometry.pixels_beat_points(Measurements(odometry=rows + unit))
+        assert verdicts(claim) == {"authors": "reproduced", "textbook": "not reproduced"}
+        return claim.grades["textbook"].why
+
+    assert "measured: with pixels of size 1 (ours-unit) synthetic pixels 0.030 m vs points 0.040 m (tied)" in why(0.030)
+    assert "not its areas: with pixels of size 1 (ours-unit) synthetic pixels 0.090 m" in why(0.090)
+    assert "not measured: odometry.protocols' ours-unit would measure it" in why()
+
+
 def test_the_ate_seed_spread_is_the_one_the_seed_study_measured():
     # The constant is the pooled relative standard deviation of the seed table in docs/studies/odometry_drift.md,
     # recomputed here from the ATEs printed there: sum of squared deviations of each run's ATE / its EM's mean, over

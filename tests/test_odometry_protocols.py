@@ -150,7 +150,9 @@ def test_runs_and_their_protocols():
     assert [run_protocol(run) for run in runs] == ["ours"] * 4 + ["authors-patch"] * 2 + ["authors-disparity"]
     assert odometry_runs(["gmm-pixels"], ["textbook"]) == {"gmm-pixels-textbook": ("gmm-pixels", "textbook")}
     assert protocol_runs(["authors-disparity"], ["icp", "gmm-points"]) == {}
-    with pytest.raises(InputError, match="^protocols must be one of ours, authors-patch, authors-disparity"):
+    assert protocol_runs(["ours-unit"], ["gmm-pixels", "icp"]) == {"gmm-pixels-ours-unit": ("gmm-pixels", "textbook")}
+    assert run_protocol("gmm-pixels-ours-unit") == "ours-unit"
+    with pytest.raises(InputError, match="^protocols must be one of ours, ours-unit, authors-patch, authors-disparity"):
         odometry_runs(["gmm-pixels"], ["textbook"], ["authors"])
 
 
@@ -158,13 +160,15 @@ def test_authors_schedule_and_protocols():
     schedule = SCHEDULES["authors"]
     assert (schedule.seed_sample, schedule.em_iter, schedule.em_tol, schedule.solver) == (None, 100, 1e-3, "bfgs")
     assert not (schedule.overlap_rounds or schedule.cut_rounds or schedule.overlap_refits)
-    assert {name: (p.schedule, p.size, p.covariance, p.methods) for name, p in PROTOCOLS.items() if p} == {
-        "authors-patch": ("authors", "unit", "patch", ("gmm-pixels", "gmm-points")),
-        "authors-disparity": ("authors", "unit", "disparity", ("gmm-pixels",))}
+    assert {name: (p.schedule, p.size, p.covariance, p.methods, p.capped) for name, p in PROTOCOLS.items() if p} == {
+        "ours-unit": (None, "unit", "patch", ("gmm-pixels",), False),
+        "authors-patch": ("authors", "unit", "patch", ("gmm-pixels", "gmm-points"), True),
+        "authors-disparity": ("authors", "unit", "disparity", ("gmm-pixels",), True)}
 
 
 def test_bad_protocol_is_one_line(tmp_path):
-    with pytest.raises(InputError, match="^protocol must be one of ours, authors-patch, authors-disparity, got 'x'$"):
+    with pytest.raises(InputError, match="^protocol must be one of ours, ours-unit, authors-patch, authors-disparity, "
+                                         "got 'x'$"):
         run_odometry(None, "gmm-pixels", protocol="x")
     with pytest.raises(InputError, match="^protocol 'authors-patch' applies to gmm-pixels, gmm-points, not 'icp'$"):
         run_odometry(None, "icp", protocol="authors-patch")
@@ -174,6 +178,19 @@ def test_cli_protocols_are_the_librarys():
     from dgmm.cli import ODOMETRY_PROTOCOLS
 
     assert ODOMETRY_PROTOCOLS == tuple(PROTOCOLS)
+
+
+@needs_fr1
+def test_the_unit_size_switch_is_ours_with_pixels_of_size_1(fr1_frame):
+    """ours-unit keeps the caller's schedule and changes only the pixels' size: the same trajectory as ours with
+    ``size="unit"``, bit for bit, and another than ours with areas."""
+    sequence, _ = fr1_frame
+    with threadpool_limits(1):
+        poses = [run_odometry(sequence, "gmm-pixels", [0, 1, 2], intrinsics=CAMERAS["ros"], seed=1, n_components=20,
+                              **options).trajectory
+                 for options in ({"protocol": "ours-unit"}, {"size": "unit"}, {"size": "area"})]
+    np.testing.assert_array_equal(poses[0].translations, poses[1].translations)
+    assert not np.array_equal(poses[0].translations, poses[2].translations)
 
 
 @needs_fr1

@@ -120,9 +120,10 @@ def run_odometry(sequence, method, frames=None, *, intrinsics=FR3, n_components=
     covariance : {"patch", "disparity"}
         Pixel primitive covariance for ``"gmm-pixels"`` (``dgmm.odometry.pixel_covariance``).
     protocol : str, default="ours"
-        A key of ``dgmm.odometry.protocols.PROTOCOLS``: ``"ours"`` runs with the arguments above; an authors'
-        protocol (``"authors-patch"``: gmm-pixels and gmm-points; ``"authors-disparity"``: gmm-pixels) replaces
-        ``schedule``, ``size`` and ``covariance`` with its own (``variant`` is one algorithm on its unit sizes).
+        A key of ``dgmm.odometry.protocols.PROTOCOLS``: ``"ours"`` runs with the arguments above; another
+        protocol (``"ours-unit"`` and ``"authors-disparity"``: gmm-pixels; ``"authors-patch"``: gmm-pixels and
+        gmm-points) replaces ``size`` and ``covariance`` with its own, and ``schedule`` where it has one
+        (``variant`` is one algorithm on its unit sizes).
     n_icp_points : int
         Points drawn per frame for ``"icp"`` (paper: 2,500).
     icp_tol : float
@@ -147,7 +148,7 @@ def run_odometry(sequence, method, frames=None, *, intrinsics=FR3, n_components=
     if settings is not None:
         if method not in settings.methods:
             raise InputError(f"protocol {protocol!r} applies to {', '.join(settings.methods)}, not {method!r}")
-        schedule, size, covariance = settings.schedule, settings.size, settings.covariance
+        schedule, size, covariance = settings.schedule or schedule, settings.size, settings.covariance
     if not isinstance(schedule, Schedule) and schedule not in SCHEDULES:
         raise InputError(f"schedule must be one of {sorted(SCHEDULES)} or a Schedule, got {schedule!r}")
     if warm_iter is not None and warm_iter < 1:

@@ -1,9 +1,13 @@
-"""Odometry protocols: ours (a measured schedule, sized pixel primitives) or the authors' per-frame protocol.
+"""Odometry protocols: ours (a measured schedule, sized pixel primitives), ours with unit sizes, or the authors'
+per-frame protocol.
 
 A protocol fixes how every frame's pixel mixture is built and fitted and how two frames are registered:
 
 - ``"ours"``: the configured schedule (``odometry.schedule``, by default ``overlap``), pixel size
   (``odometry.pixel_size``) and EM variants, flat ``patch`` covariances; every method.
+- ``"ours-unit"``: ours with every pixel primitive of size 1, gmm-pixels under textbook EM only: the switch that
+  measures what the pixels' footprint areas (∝ Z²) do to textbook EM's odometry (on sizes of 1 both EM variants are
+  one algorithm). It runs every frame, as ours does.
 - ``"authors-patch"``, ``"authors-disparity"``: the authors' notebooks (leonidk/direct_gmm ``gen_gmm-mine-patch``,
   ``gen_gmm-mine`` and ``reg_results``): every pixel primitive of size 1 (``set_areas(np.ones(n))``) with the
   notebook's flat ``patch`` or ``disparity`` box covariance (:mod:`dgmm.odometry.pixel_covariance`), fitted as
@@ -24,18 +28,21 @@ OURS = "ours"
 
 @dataclass(frozen=True)
 class Protocol:
-    """The per-frame settings a protocol imposes (``run_odometry``'s ``schedule``, ``size``, ``covariance``) and
-    the EM variant its runs are labelled with."""
+    """The per-frame settings a protocol imposes (``run_odometry``'s ``schedule``, None keeping the caller's,
+    ``size``, ``covariance``), the EM variant its runs are labelled with, its methods, and whether it runs only the
+    first ``odometry.authors_frames`` frames (``capped``: the authors' per-frame EM costs 6-8x ours)."""
 
-    schedule: str
+    schedule: str | None
     size: str
     covariance: str
     variant: str = "authors"
     methods: tuple = ("gmm-pixels",)
+    capped: bool = True
 
 
 PROTOCOLS = {
     OURS: None,
+    "ours-unit": Protocol(schedule=None, size="unit", covariance="patch", variant="textbook", capped=False),
     "authors-patch": Protocol(schedule="authors", size="unit", covariance="patch", methods=("gmm-pixels", "gmm-points")),
     "authors-disparity": Protocol(schedule="authors", size="unit", covariance="disparity"),
 }
@@ -50,8 +57,8 @@ def check_protocol(protocol, key="protocol"):
 
 
 def protocol_runs(protocols, methods):
-    """The runs of the authors' protocols among ``protocols`` (``"ours"`` is left to the caller), for the methods
-    each applies to among ``methods``.
+    """The runs of the protocols other than ours among ``protocols`` (``"ours"`` is left to the caller), for the
+    methods each applies to among ``methods``.
 
     Returns
     -------

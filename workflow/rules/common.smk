@@ -9,7 +9,7 @@ from snakemake.utils import validate
 from dgmm.data import REGISTRY
 from dgmm.odometry import odometry_runs
 from dgmm.odometry.pixels import sequence_intrinsics
-from dgmm.odometry.protocols import OURS, run_protocol
+from dgmm.odometry.protocols import PROTOCOLS as ODOMETRY_PROTOCOLS, run_protocol
 from dgmm.experiments.report import figure_names
 from dgmm.experiments.sweep import parse_input, variants_for
 from dgmm.experiments.trials import METHODS, NO_VARIANT, PROTOCOLS, method_variants, mixture_source
@@ -325,7 +325,8 @@ def odometry_protocol(wildcards):
 def odometry_frames(wildcards):
     """First frames of an odometry job: odometry.frames, capped at odometry.authors_frames for the authors'
     protocols (their per-frame EM runs to convergence: ~10x our CPU per frame)."""
-    if run_protocol(wildcards.run) == OURS:
+    settings = ODOMETRY_PROTOCOLS[run_protocol(wildcards.run)]
+    if settings is None or not settings.capped:
         return ODO["frames"]
     return min(ODO["frames"], ODO["authors_frames"])
 

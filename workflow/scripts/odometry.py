@@ -27,8 +27,8 @@ frames, groundtruth = first_frames(sequence, p.frames, require_groundtruth=False
 seed = job_seed(p.seed, f"odometry/{w.sequence}/{w.run}", 0)
 options = dict(intrinsics=intrinsics, n_components=p.components, schedule=p.schedule, warm_iter=p.warm_iter or None,
                variant=variant, size=p.pixel_size, protocol=p.protocol, n_icp_points=p.icp_points, seed=seed)
-settings = PROTOCOLS[p.protocol]  # an authors' protocol's schedule and pixel size replace the configured ones
-schedule, size = (p.schedule, p.pixel_size) if settings is None else (settings.schedule, settings.size)
+settings = PROTOCOLS[p.protocol]  # another protocol's schedule (if it has one) and pixel size replace the configured
+schedule, size = (p.schedule, p.pixel_size) if settings is None else (settings.schedule or p.schedule, settings.size)
 params = dict(sequence=w.sequence, folder=str(smk.input.sequence), method=method, variant=variant,
               intrinsics=camera, frames=len(frames), n_components=p.components, protocol=p.protocol, schedule=schedule,
               warm_iter=p.warm_iter, size=size, n_icp_points=p.icp_points, seed=seed, root_seed=p.seed)
