@@ -14,7 +14,7 @@ from conftest import REPO
 
 EXPERIMENTS, RUNTIME = "dgmm.experiments", "dgmm.runtime"
 JOB_SCRIPTS = frozenset(path.stem for path in (REPO / "workflow" / "scripts").glob("*.py"))
-MAX_TOP_LEVEL_MODULES = 12
+MAX_TOP_LEVEL_MODULES = 13
 
 
 def module_name(path, root):

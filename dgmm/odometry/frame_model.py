@@ -21,6 +21,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from dgmm.errors import InputError
+from dgmm.gaussian import SCREEN
 from dgmm.mixture import GaussianMixture
 from dgmm.odometry.em_start import lloyd_start
 from dgmm.odometry.measured_cut import MeasuredFrame, register_cut_rounds
@@ -50,11 +51,6 @@ CUT_TOL = 1e-3
 fr1/xyz's radius of about 1 m; :func:`dgmm.odometry.measured_cut.register_cut_rounds`): the ATE stays within the
 seed-to-seed spread of always running all three rounds, for a quarter less of the rounds' CPU (measured on fr1/xyz
 and the rotation-only room: docs/studies/odometry_constants.md)."""
-
-E_STEP_SCREEN = 50.0
-"""Every frame's EM leaves out the pairs below ``e^-50`` of a pixel's best component (``GaussianMixture(screen=50)``):
-about 9 in 10 of a fr1/xyz frame's pairs at K = 100, each below rounding of its pixel's sum (measured:
-docs/benchmarks/odometry.md)."""
 
 STARVED_WEIGHT = 0.1
 """Warm start: a component of the previous frame's mixture whose weight is below ``STARVED_WEIGHT / K`` restarts."""
@@ -171,8 +167,9 @@ def _fit_mixture(prims, rng, previous, options):
     ``previous`` is the previous frame's mixture or ``None`` (see :func:`_warm_start`).
     """
     schedule, k = options["schedule"], options["n_components"]
+    # screened EM: the pairs left out are about 9 in 10 of a fr1/xyz frame's at K = 100 (docs/benchmarks/odometry.md)
     common = dict(variant=options["variant"], random_state=rng, reg_covar=REG_COVAR, memory_limit=EM_BLOCK_BYTES,
-                  screen=E_STEP_SCREEN)
+                  screen=SCREEN)
     if previous is not None and options["warm_iter"] is not None:
         weights, means, precisions = _warm_start(previous, prims, rng)
         return GaussianMixture(k, max_iter=options["warm_iter"], weights_init=weights, means_init=means,
