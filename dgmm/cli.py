@@ -391,6 +391,7 @@ def _odometry(args):
 
     from dgmm.odometry import first_frames, open_sequence, run_odometry
     from dgmm.odometry.metrics import drift_metrics
+    from dgmm.odometry.pixels import PIXEL_STEP
     from dgmm.odometry.tum import write_trajectory
 
     sequence = open_sequence(args.sequence, args.depth_topic, args.camera_info_topic, args.groundtruth)
@@ -416,8 +417,8 @@ def _odometry(args):
 
             mcap = args.mcap or Path(stack.enter_context(tempfile.TemporaryDirectory())) / "odometry.mcap"
             recorder = stack.enter_context(OdometryRecorder(mcap, args.rrd, params=params, groundtruth=groundtruth,
-                                                            intrinsics=intrinsics,
-                                                            camera_frame=sequence.camera_frame))
+                                                            intrinsics=intrinsics, camera_frame=sequence.camera_frame,
+                                                            pixel_step=PIXEL_STEP))
 
         def advance(frame):
             bar.update()

@@ -154,13 +154,14 @@ def test_bfgs_poses_equal_the_numpy_path(bunny_mixture):
 
 
 def test_loading_the_kernels_leaves_nothing_for_a_registration_to_load():
-    """What the sweep's job server calls before forking its jobs (dgmm.compiled.load_p2d_kernels) loads every kernel
-    specialisation that P2D's solvers then run on a fitted scikit-learn mixture: a fresh process, so that no other
-    test has loaded them first."""
+    """What the sweep's job server calls before forking its jobs (dgmm.registration.p2d.load_p2d_kernels) loads every
+    kernel specialisation that P2D's solvers then run on a fitted scikit-learn mixture: a fresh process, so that no
+    other test has loaded them first."""
     program = """
 import numpy as np
 from sklearn.mixture import GaussianMixture
-from dgmm.compiled import load_p2d_kernels, registration as kernels
+from dgmm.compiled import registration as kernels
+from dgmm.registration.p2d import load_p2d_kernels
 from dgmm.registration import register_p2d, register_p2d_coarse_to_fine
 load_p2d_kernels()
 names = [name for name in dir(kernels) if hasattr(getattr(kernels, name), "signatures")]

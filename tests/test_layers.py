@@ -69,6 +69,18 @@ def test_no_module_imports_across_floors():
     assert layer_violations(REPO) == []
 
 
+# Within the library: the numba kernels sit below the code that calls them, the recorders beside the odometry.
+BELOW = {"dgmm.compiled": ("dgmm.mixture", "dgmm.registration", "dgmm.odometry", "dgmm.recording"),
+         "dgmm.recording": ("dgmm.odometry",)}
+
+
+def test_the_kernels_and_the_recorders_import_nothing_above_them():
+    upward = [f"{name} imports {imported}" for path in sorted((REPO / "dgmm").rglob("*.py"))
+              for name in [module_name(path, REPO)] for lower, uppers in BELOW.items() if within(name, lower)
+              for imported in sorted(imported_names(path, name)) if any(within(imported, up) for up in uppers)]
+    assert upward == []
+
+
 def test_the_top_level_holds_the_library_s_modules_and_the_floors():
     top = sorted(path.name for path in (REPO / "dgmm").glob("*.py"))
     packages = sorted(path.name for path in (REPO / "dgmm").iterdir() if (path / "__init__.py").is_file())

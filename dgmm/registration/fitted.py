@@ -81,7 +81,8 @@ class FittedMixture:
 
     @property
     def log_normalisers(self):
-        """``log π_k - 1.5 log 2π + log det U_k``: log-density of component k at its mean plus log weight, (n_components,)."""
+        """``log π_k - 1.5 log 2π + log det U_k``: log-density of component k at its mean plus log weight,
+        (n_components,)."""
         return self._coefficients[:, -1]
 
     @cached_property

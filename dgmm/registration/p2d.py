@@ -227,3 +227,14 @@ def register_p2d(source, mixture, gradient="analytic", callback=None, options=No
                                      length / TRANSLATION_UNIT, np.eye(3), np.zeros(3), callback, options)
     return minimise_bfgs("p2d", p2d_params_cost(points, centre, mix, compiled), centre, length, IDENTITY_PARAMS,
                          gradient, callback, options)
+
+
+def load_p2d_kernels():
+    """Load P2D's kernels from numba's cache (compiling them where there is none) by registering four points once
+    with each solver: forks of a process that called this, the job server's registration jobs, run them at once."""
+    means = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]])
+    mixture = FittedMixture(np.full(2, 0.5), means, np.repeat(np.eye(3)[None], 2, axis=0),
+                            np.repeat(np.eye(3)[None], 2, axis=0))
+    points = np.array([[0.1, 0.0, 0.0], [0.9, 0.1, 0.0], [0.0, 0.1, 0.1], [1.0, 0.0, 0.1]])
+    for solver in ("bfgs", "gauss-newton"):
+        register_p2d(points, mixture, solver=solver)
