@@ -456,7 +456,7 @@ def _precisions_cholesky(covariances):
 # ---------------------------------------------------------------------------------------------------------
 
 def _kmeans_resp(means, weights, n_components, rng):
-    """Hard responsibilities from k-means on the primitive means, weighted by size.
+    """Hard responsibilities from k-means on the primitive means, weighted by size: :func:`_hard_resp` of its labels.
 
     Above :data:`_KMEANS_SAMPLE` primitives, k-means runs on a uniform random subsample of that many (still
     weighted by size, so it estimates the same weighted objective) and every primitive takes the label of its
@@ -469,23 +469,34 @@ def _kmeans_resp(means, weights, n_components, rng):
     else:
         sample = np.sort(rng.choice(len(means), _KMEANS_SAMPLE, replace=False))
         labels = kmeans.fit(means[sample], sample_weight=weights[sample]).predict(means)
+    return functools.partial(_hard_resp, labels)
 
-    def block(rows, out):
-        out.fill(0.0)
-        out[labels[rows], np.arange(out.shape[1])] = 1.0
-        return out
-    return block
+
+def _hard_resp(labels, rows, out):
+    """One-hot responsibilities (n_components, n_rows) of the primitives ``rows`` from their ``labels``, in ``out``."""
+    out.fill(0.0)
+    out[labels[rows], np.arange(out.shape[1])] = 1.0
+    return out
 
 
 def _random_resp(means, weights, n_components, rng):
-    """Uniform random soft responsibilities, normalised per primitive (drawn block after block)."""
-    def block(rows, out):
-        resp = rng.uniform(size=out.shape[::-1])  # a row per primitive, drawn in primitive order
-        return np.divide(resp.T, resp.sum(axis=1), out=out)
-    return block
+    """Uniform random soft responsibilities, normalised per primitive: :func:`_uniform_resp` drawing from ``rng``."""
+    return functools.partial(_uniform_resp, rng)
 
 
-# init -> function(means, weights, n_components, rng) -> block(rows, out) -> responsibilities of rows, in out
+def _uniform_resp(rng, rows, out):
+    """Responsibilities (n_components, n_rows) of the primitives ``rows``, uniform random numbers normalised per
+    primitive, in ``out``; a row per primitive drawn in primitive order (blocks run in order on one thread)."""
+    resp = rng.uniform(size=out.shape[::-1])
+    return np.divide(resp.T, resp.sum(axis=1), out=out)
+
+
+def _init_block_sums(inputs, resp, rows, out):
+    """:func:`_m_step_sums` of the initial responsibilities ``resp(rows, out)`` of the primitives ``rows``."""
+    return _m_step_sums(resp(rows, out), inputs.table[rows, :-1], inputs.mstep_weights[rows])
+
+
+# init -> function(means, weights, n_components, rng) -> resp(rows, out): responsibilities of rows, in out
 _INIT_RESP = {"kmeans": _kmeans_resp, "random": _random_resp}
 
 
@@ -581,9 +592,9 @@ class GaussianMixture(DensityMixin, BaseEstimator):
         The bound after each iteration (but the last when ``tol`` is None); ``history_[-1] == lower_bound_``
         when it is not empty.
     e_step_params_ : tuple of ndarray
-        ``(weights, means, covariances, precisions_cholesky)`` (the last two (K, d, d) matrices) whose E-step gave the responsibilities of the last
-        M-step (the parameters before it): with ``dgmm.mixture.responsibilities`` they take a primitive's share out
-        of that M-step exactly, as :mod:`dgmm.odometry.measured_cut` does.
+        ``(weights, means, covariances, precisions_cholesky)`` (the last two (K, d, d) matrices) whose E-step gave
+        the responsibilities of the last M-step (the parameters before it): with ``dgmm.mixture.responsibilities``
+        they take a primitive's share out of that M-step exactly, as :mod:`dgmm.odometry.measured_cut` does.
     """
 
     def __init__(self, n_components=1, *, covariance_type="full", init="kmeans", max_iter=25, tol=1e-12,
@@ -638,15 +649,14 @@ class GaussianMixture(DensityMixin, BaseEstimator):
             raise InputError(f"n_components={self.n_components} is larger than the {n_present} primitives of "
                              f"positive size (n_samples = {n_present})")
 
-    def _initial_params(self, prims, centre, unit, table, mstep_weights, blocks, rng):
+    def _initial_params(self, prims, centre, inputs, blocks, rng):
         """Starting (weights, means, precision Choleskys) in internal units: from ``init``, replaced by user
         values."""
-        k, d = self.n_components, prims.dimension
+        k, d, unit = self.n_components, prims.dimension, inputs.unit
         user = (self.weights_init, self.means_init, self.precisions_init)
         if any(value is None for value in user):
-            resp = _INIT_RESP[self.init](prims.means / unit, mstep_weights, k, rng)
-            sums = blocks.run(lambda rows, out: _m_step_sums(resp(rows, out), table[rows, :-1], mstep_weights[rows]),
-                              threads=False)
+            resp = _INIT_RESP[self.init](prims.means / unit, inputs.mstep_weights, k, rng)
+            sums = blocks.run(functools.partial(_init_block_sums, inputs, resp), threads=False)
             weights, means, prec_chol, _ = _m_step(sums, self.reg_covar / unit**2, self.covariance_type)
         if self.weights_init is not None:
             weights = _check_array("weights_init", self.weights_init, (k,))
@@ -710,7 +720,7 @@ class GaussianMixture(DensityMixin, BaseEstimator):
         row_floats = 2 * table.shape[1] + 2
         with BlockPass(len(prims), self.n_components, self.memory_limit, self.n_jobs, row_floats) as blocks:
             try:
-                params = self._initial_params(prims, centre, unit, table, mstep_weights, blocks, rng)
+                params = self._initial_params(prims, centre, inputs, blocks, rng)
                 del prims  # the loop needs only the moment table (the caller may still hold the input)
                 sums, bound = _e_step(inputs, params, blocks)
                 _check_bound(bound)
