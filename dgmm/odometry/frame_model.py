@@ -5,8 +5,8 @@ and registers with the determinant-free D2D cost; ``"gmm-points"`` does the same
 points; ``"icp"`` keeps 2,500 points drawn at random from each frame's back-projection for point-to-point ICP.
 
 Schedules (:data:`SCHEDULES`): the paper does not state how each frame's EM starts or how long it runs, nor its
-odometry's solver, so the sweep's schedule is chosen by measurement (``benchmarks/studies/odometry_schedules.py``)
-and the code before that choice is kept as ``"reference"``. Every frame's start is drawn from its own seed.
+odometry's solver, so the sweep's schedule is chosen by measurement (``benchmarks/studies/odometry_schedules.py``,
+against the alternatives of :mod:`dgmm.odometry.schedule_studies`). Every frame's start is drawn from its own seed.
 
 Warm start (``warm_iter``): every frame after the first starts from the previous frame's mixture (its starved
 components restarted on the data) and runs ``warm_iter`` iterations. It under-measures the motion: a few EM
@@ -16,7 +16,7 @@ the shortfall compounds into drift (measured: docs/studies/odometry_constants.md
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -134,31 +134,21 @@ class Schedule:
             raise InputError(f"overlap_scales {self.overlap_scales} end widened: they need cut rounds after them")
 
 
-_FAST = Schedule(seed_sample=1024, lloyd_iter=3, em_iter=2, solver="gauss-newton")
-
 SCHEDULES = {
-    "overlap": replace(_FAST, overlap_rounds=1, overlap_scales=(0.0625,), cut_rounds=3),
-    "fast": _FAST,
-    "common-view": replace(_FAST, overlap_rounds=2, overlap_scales=(0.25, 0.125, 0.0625, 0.03125, 0.0),
-                           overlap_refits=2),
-    "reference": Schedule(seed_sample=None, lloyd_iter=0, em_iter=25, solver="bfgs"),
+    "overlap": Schedule(seed_sample=1024, lloyd_iter=3, em_iter=2, solver="gauss-newton", overlap_rounds=1,
+                        overlap_scales=(0.0625,), cut_rounds=3),
     "authors": Schedule(seed_sample=None, lloyd_iter=0, em_iter=SKLEARN_MAX_ITER, solver="bfgs", em_tol=SKLEARN_TOL),
 }
-"""Named per-frame schedules, chosen by measurement (benchmarks/studies/odometry_schedules.py,
-benchmarks/studies/odometry_rotation_room.py; the docs' Visual odometry section). ``"fast"``: k-means++ seeds from 1,024
-primitives, 3 Lloyd iterations and 2 EM iterations on every primitive, Gauss-Newton D2D of the whole mixtures.
-``"overlap"``, the sweep's default: the same mixtures, registered first on the components each camera sees of the
-other, widened by 0.0625 RMS radii (it keeps fast turns in the right basin), then up to three times, until the pose
-settles (:data:`CUT_TOL`), cut to the primitives each frame measures of the other at the pose so far and registered
-again (``cut_rounds``): what only one frame measured no longer pulls the estimate toward the identity.
-``"common-view"``: two overlap rounds at each of five widenings, then both frames refitted twice on the primitives
-the other camera sees (robust where views change fastest, at about five times the CPU). ``"reference"``:
-scikit-learn's k-means on every primitive, 25 EM iterations (the fitting experiments' count; the paper does not state
-the odometry's) and the paper's BFGS. ``"authors"``: the authors' notebooks' per-frame fit, scikit-learn's
-``GaussianMixture(100)`` at its defaults (k-means start, up to 100 iterations, ``tol`` 1e-3;
-:mod:`dgmm.odometry.sklearn_em`), and BFGS D2D of the whole mixtures from the identity (``reg_results.ipynb``); with
-unit pixel sizes and a ``patch`` or ``disparity`` covariance it is the authors' protocol
-(:mod:`dgmm.odometry.protocols`)."""
+"""The library's per-frame schedules: the sweep's, chosen by measurement, and the authors' protocol's (the studies'
+alternatives are in :mod:`dgmm.odometry.schedule_studies`). ``"overlap"``, the default: k-means++ seeds from 1,024
+primitives, 3 Lloyd iterations and 2 EM iterations on every primitive; Gauss-Newton D2D first on the components
+each camera sees of the other, widened by 0.0625 RMS radii (it keeps fast turns in the right basin), then up to
+three times, until the pose settles (:data:`CUT_TOL`), cut to the primitives each frame measures of the other at
+the pose so far and registered again (``cut_rounds``): what only one frame measured no longer pulls the estimate
+toward the identity. ``"authors"``: the authors' notebooks' per-frame fit, scikit-learn's ``GaussianMixture(100)``
+at its defaults (k-means start, up to 100 iterations, ``tol`` 1e-3; :mod:`dgmm.odometry.sklearn_em`), and BFGS D2D
+of the whole mixtures from the identity (``reg_results.ipynb``); with unit pixel sizes and a ``patch`` or
+``disparity`` covariance it is the authors' protocol (:mod:`dgmm.odometry.protocols`)."""
 
 
 def _fit_mixture(prims, rng, previous, options):
