@@ -185,7 +185,7 @@ def _moment_features(means, covariances, centre, scale, unit=1.0, out=None):
     features = np.empty((len(means), shape.n_columns)) if out is None else out
     quadratic_features((means - centre) / unit, out=features[:, :shape.n_quadratic])
     second = np.divide(covariances[:, shape.rows, shape.cols], unit**2)
-    second[:, shape.d:] *= 2.0
+    second[:, shape.d:] *= 2.0  # off-diagonals doubled, as the features'
     features[:, :shape.n_second] += second
     if scale is not None:
         features[:, :shape.n_quadratic] *= np.reshape(scale, (-1, 1))
