@@ -37,7 +37,7 @@ JOB_SERVER = JobServer(
     [
         "snakemake.script",
         *script_imports(JOB_SCRIPTS),
-        "dgmm.compiled:load_p2d_kernels",
+        "dgmm.registration.p2d:load_p2d_kernels",
         "threadpoolctl:threadpool_info",
     ]
 )

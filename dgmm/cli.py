@@ -391,6 +391,7 @@ def _odometry(args):
 
     from dgmm.odometry import first_frames, open_sequence, run_odometry
     from dgmm.odometry.metrics import drift_metrics
+    from dgmm.odometry.pixels import PIXEL_STEP
     from dgmm.odometry.tum import write_trajectory
 
     sequence = open_sequence(args.sequence, args.depth_topic, args.camera_info_topic, args.groundtruth)
@@ -416,8 +417,8 @@ def _odometry(args):
 
             mcap = args.mcap or Path(stack.enter_context(tempfile.TemporaryDirectory())) / "odometry.mcap"
             recorder = stack.enter_context(OdometryRecorder(mcap, args.rrd, params=params, groundtruth=groundtruth,
-                                                            intrinsics=intrinsics,
-                                                            camera_frame=sequence.camera_frame))
+                                                            intrinsics=intrinsics, camera_frame=sequence.camera_frame,
+                                                            pixel_step=PIXEL_STEP))
 
         def advance(frame):
             bar.update()
@@ -462,10 +463,10 @@ def _odometry_arguments(parser):
                              "rgbd_dataset_freiburgN_*: ros for freiburg 1 and 2, fr3 for freiburg 3)")
     parser.add_argument("--schedule", default="overlap", metavar="overlap|fast|common-view|reference",
                         help="every frame's EM start, EM iterations and D2D stages: overlap (the sweep's: few EM "
-                             "iterations, D2D on what each frame sees and measures of the other), fast (the same "
-                             "mixtures, D2D of the whole mixtures), common-view (both frames refitted on their common "
-                             "view: robust under the fastest turns, 5x the CPU) or reference (k-means + 25 EM "
-                             "iterations, BFGS) (default: %(default)s)")
+                             "iterations, D2D on what each frame sees and measures of the other), or an alternative "
+                             "of the studies: fast (the same mixtures, D2D of the whole mixtures), common-view (both "
+                             "frames refitted on their common view: robust under the fastest turns, 5x the CPU) or "
+                             "reference (k-means + 25 EM iterations, BFGS) (default: %(default)s)")
     parser.add_argument("--pixel-size", choices=("unit", "area"), default="unit",
                         help="size of a pixel primitive in EM (gmm-pixels, protocol ours): unit (every pixel counts "
                              "once; textbook and the authors' EM are then one algorithm) or area (its footprint, "

@@ -17,7 +17,8 @@ so each iteration streams over blocks of primitives (``dgmm.em_blocks``): memory
 n_components), and blocks may run on several threads without changing a bit of the result.
 
 Any dimension ``d >= 1`` (the paper's §V-A update equations do not depend on it): the table's layout is
-:class:`_Layout`, the upper triangle diagonal first, so that the 3-D table is the paper sweep's, column for column.
+:class:`dgmm.gaussian.Layout`, the upper triangle diagonal first, so that the 3-D table is the paper sweep's, column for
+column; its product with :func:`dgmm.gaussian.log_density_coefficients` is ``log rho``.
 A screened fit runs a compiled kernel in 3-D (:mod:`dgmm.compiled.e_step`) and numpy products in other dimensions.
 
 Read top to bottom: checks, moment features, E-step, M-step, initialisation, estimator (the EM variants are in
@@ -49,10 +50,10 @@ from sklearn.utils.validation import check_is_fitted, validate_data
 
 from dgmm.em_blocks import DEFAULT_MEMORY_LIMIT, BlockPass
 from dgmm.errors import FitError, InputError, InputTypeError
+from dgmm.gaussian import layout, log_density_coefficients, quadratic_features, unpack
 from dgmm.primitives import Primitives, as_primitives
 from dgmm.variants import INITS, VARIANTS
 
-_LOG_2PI = np.log(2.0 * np.pi)
 _EPS = 10.0 * np.finfo(np.float64).eps
 # Bytes of log rho per block when scoring: a block stays in the CPU cache through the normalisation's passes (2x
 # faster than 64k-row blocks at K = 100-400 on 50k points); rows are scored independently, so blocks change no bit
@@ -105,53 +106,9 @@ class NotFittedError(InputError, _SklearnNotFittedError):
     """A model used before it was fitted: a :class:`dgmm.InputError` and scikit-learn's ``NotFittedError``."""
 
 
-@dataclass(frozen=True)
-class _Layout:
-    """Columns of the moment table in dimension ``d``.
-
-    ``rows, cols``: the upper triangle of a symmetric d×d matrix, diagonal first, then the off-diagonals row by row
-    (in 3-D: (0,0), (1,1), (2,2), (0,1), (0,2), (1,2)); ``n_second = d(d+1)/2`` columns of it, then ``d`` of the
-    mean, a one, and the constant column: ``n_features = n_second + d + 2``. The M-step sums are the first
-    ``n_sums = n_features − 1`` columns.
-    """
-
-    d: int
-    rows: np.ndarray
-    cols: np.ndarray
-
-    @property
-    def n_second(self):
-        return len(self.rows)
-
-    @property
-    def mean(self):
-        return slice(self.n_second, self.n_second + self.d)
-
-    @property
-    def one(self):
-        return self.n_second + self.d
-
-    @property
-    def n_sums(self):
-        return self.n_second + self.d + 1
-
-    @property
-    def n_features(self):
-        return self.n_second + self.d + 2
-
-
-@functools.lru_cache(maxsize=None)
-def _layout(d):
-    """The :class:`_Layout` of dimension ``d``."""
-    upper_rows, upper_cols = np.triu_indices(d, 1)
-    diagonal = np.arange(d)
-    return _Layout(d, np.concatenate([diagonal, upper_rows]), np.concatenate([diagonal, upper_cols]))
-
-
-def _layout_of(n_features):
-    """The :class:`_Layout` whose table has ``n_features`` columns."""
-    d = int(round((np.sqrt(8 * n_features - 15) - 3) / 2))  # n_features = d(d+1)/2 + d + 2
-    return _layout(d)
+def _layout_of(n_columns):
+    """The :class:`dgmm.gaussian.Layout` of a table of ``n_columns`` (``d(d+1)/2 + d + 2``) columns."""
+    return layout(int(round((np.sqrt(8 * n_columns - 15) - 3) / 2)))
 
 
 def _check_bound(bound):
@@ -216,26 +173,23 @@ def _unit(deviations, covariances, weights):
 # ---------------------------------------------------------------------------------------------------------
 
 def _moment_features(means, covariances, centre, scale, unit=1.0, out=None):
-    """Feature table ``(n_prims, n_features)`` of the centred moments of primitives given by means and covariances.
+    """Feature table ``(n_prims, n_columns)`` of the centred moments of primitives given by means and covariances.
 
-    In the :class:`_Layout` of their dimension (3-D: 11 columns): the upper triangle of ``E[x xᵀ]`` (off-diagonals
-    doubled), the mean, a one; all multiplied by the E-step ``scale`` (None: unscaled). The last column is an
-    unscaled one that carries the per-component constant. Then ``features @ _component_coefficients(...)ᵀ`` is
-    ``log rho``. Moments are of ``(x − centre) / unit``, computed without forming the data-unit second moments
-    (which overflow at 1e155). Written into ``out`` when given.
+    The :func:`dgmm.gaussian.quadratic_features` of their means with the covariances added to ``x xᵀ`` (3-D: 11
+    columns), all multiplied by the E-step ``scale`` (None: unscaled); the last column is an unscaled one that
+    carries the per-component constant. Then ``features @ log_density_coefficients(...)ᵀ`` is ``log rho``. Moments
+    are of ``(x − centre) / unit``, computed without forming the data-unit second moments (which overflow at
+    1e155). Written into ``out`` when given.
     """
-    layout = _layout(means.shape[1])
-    rows, cols, n_second, n_sums = layout.rows, layout.cols, layout.n_second, layout.n_sums
-    means = (means - centre) / unit
-    features = np.empty((len(means), layout.n_features)) if out is None else out
-    np.divide(covariances[:, rows, cols], unit**2, out=features[:, :n_second])
-    features[:, :n_second] += means[:, rows] * means[:, cols]
-    features[:, layout.d:n_second] *= 2.0
-    features[:, layout.mean] = means
-    features[:, layout.one] = 1.0
+    shape = layout(means.shape[1])
+    features = np.empty((len(means), shape.n_columns)) if out is None else out
+    quadratic_features((means - centre) / unit, out=features[:, :shape.n_quadratic])
+    second = np.divide(covariances[:, shape.rows, shape.cols], unit**2)
+    second[:, shape.d:] *= 2.0  # off-diagonals doubled, as the features'
+    features[:, :shape.n_second] += second
     if scale is not None:
-        features[:, :n_sums] *= np.reshape(scale, (-1, 1))
-    features[:, n_sums] = 1.0
+        features[:, :shape.n_quadratic] *= np.reshape(scale, (-1, 1))
+    features[:, shape.n_quadratic] = 1.0
     return features
 
 
@@ -243,32 +197,12 @@ def _moment_table(prims, centre, unit):
     """:func:`_moment_features` (unscaled) of all ``prims``, built chunk by chunk so that its (n_prims, d, d)
     temporaries never exist for all primitives at once."""
     d = prims.dimension
-    table = np.empty((len(prims), _layout(d).n_features))
+    table = np.empty((len(prims), layout(d).n_columns))
     chunk = max(1, _TABLE_CHUNK * 9 // d**2)
     for start in range(0, len(prims), chunk):
         rows = slice(start, start + chunk)
         _moment_features(prims.means[rows], prims.covariances[rows], centre, None, unit, out=table[rows])
     return table
-
-
-def _component_coefficients(weights, means, precisions_cholesky, unit=1.0):
-    """Coefficients ``(n_components, n_features)`` such that features · coefficients = log rho (E-step).
-
-    ``−½ E_p[(x−mu_i)ᵀ Λ_i (x−mu_i)] = −½ (<Λ_i, E_p[x xᵀ]> − 2 mu_iᵀ Λ_i mu_p + mu_iᵀ Λ_i mu_i)``, plus
-    ``log lambda_i − d/2 log 2π + ½ log det Λ_i`` on the constant column. Parameters are in internal units
-    (data / ``unit``); the log-determinant is the data-unit one, so that ``log rho`` is a data-unit density.
-    """
-    layout = _layout(means.shape[1])
-    precisions = precisions_cholesky @ np.swapaxes(precisions_cholesky, 1, 2)
-    precision_means = np.einsum("kij,kj->ki", precisions, means)
-    log_det = np.log(np.diagonal(precisions_cholesky, axis1=1, axis2=2) / unit).sum(axis=1)
-    coefficients = np.empty((len(weights), layout.n_features))
-    coefficients[:, :layout.n_second] = -0.5 * precisions[:, layout.rows, layout.cols]
-    coefficients[:, layout.mean] = precision_means
-    coefficients[:, layout.one] = -0.5 * np.einsum("ki,ki->k", means, precision_means)
-    with np.errstate(divide="ignore"):
-        coefficients[:, layout.n_sums] = np.log(weights) - (0.5 * layout.d) * _LOG_2PI + log_det
-    return coefficients
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -356,8 +290,8 @@ def _screened_block_sums(inputs, transposed_coefficients, rows, out):
 def _e_step(inputs, params, blocks):
     """EM's E-step under ``params`` (weights, means, precision Choleskys in internal units), block by block: the
     M-step sums of its responsibilities and the bound (the size-weighted mean of the log-normalisers)."""
-    coefficients = _component_coefficients(*params, unit=inputs.unit)
-    if inputs.screen is not None and coefficients.shape[1] == _layout(3).n_features:
+    coefficients = log_density_coefficients(*params, unit=inputs.unit)
+    if inputs.screen is not None and coefficients.shape[1] == layout(3).n_columns:
         block = functools.partial(_screened_block_sums, inputs, np.ascontiguousarray(coefficients.T))
     else:
         block = functools.partial(_block_sums, inputs, coefficients)
@@ -381,7 +315,7 @@ class EStep:
         self.screen = screen
         self.centre = weights @ means
         self.unit, _ = _unit(means - self.centre, covariances, weights)
-        self.coefficients = _component_coefficients(weights, (means - self.centre) / self.unit,
+        self.coefficients = log_density_coefficients(weights, (means - self.centre) / self.unit,
                                                     precisions_cholesky * self.unit, unit=self.unit)
 
     def log_rho_blocks(self, means, covariances, scale=1.0):
@@ -432,7 +366,7 @@ def responsibilities(prims, weights, means, covariances, precisions_cholesky, sc
 def _m_step_sums(resp, moments, row_weights):
     """``resp ·`` (``moments``, the moment table's rows but their last column, × ``row_weights``, their M-step
     weights): every component's second and first moment sums and mass (eqs. 12, 13), shape (n_components,
-    n_sums), 10 in 3-D. ``resp`` is (n_components, n_rows)."""
+    n_quadratic), 10 in 3-D. ``resp`` is (n_components, n_rows)."""
     return resp @ (moments * row_weights[:, None])
 
 
@@ -440,16 +374,13 @@ def _m_step(sums, reg_covar, covariance_type="full"):
     """Mixture parameters (weights, centred means, precision Choleskys, covariances) from the M-step sums
     (:func:`_m_step_sums` added over all primitives); covariances and Choleskys as (K, d, d) matrices whatever the
     ``covariance_type`` (:func:`_constrained`)."""
-    layout = _layout_of(sums.shape[1] + 1)
-    d, rows, cols = layout.d, layout.rows, layout.cols
-    mass = sums[:, layout.one] + _EPS
-    means = sums[:, layout.mean] / mass[:, None]
-    second = np.empty((len(mass), d, d))
-    upper = sums[:, :layout.n_second] / mass[:, None]
-    upper[:, d:] *= 0.5
-    second[:, rows, cols] = upper
-    second[:, cols, rows] = upper
-    covariances = second - means[:, :, None] * means[:, None, :]
+    shape = _layout_of(sums.shape[1] + 1)
+    d = shape.d
+    mass = sums[:, shape.one] + _EPS
+    means = sums[:, shape.mean] / mass[:, None]
+    second = sums[:, :shape.n_second] / mass[:, None]
+    second[:, d:] *= 0.5  # the features' doubled off-diagonals
+    covariances = unpack(second) - means[:, :, None] * means[:, None, :]
     if covariance_type != "full":
         covariances = _constrained(covariances, mass, covariance_type)
     covariances[:, np.arange(d), np.arange(d)] += reg_covar
@@ -525,7 +456,7 @@ def _precisions_cholesky(covariances):
 # ---------------------------------------------------------------------------------------------------------
 
 def _kmeans_resp(means, weights, n_components, rng):
-    """Hard responsibilities from k-means on the primitive means, weighted by size.
+    """Hard responsibilities from k-means on the primitive means, weighted by size: :func:`_hard_resp` of its labels.
 
     Above :data:`_KMEANS_SAMPLE` primitives, k-means runs on a uniform random subsample of that many (still
     weighted by size, so it estimates the same weighted objective) and every primitive takes the label of its
@@ -538,23 +469,34 @@ def _kmeans_resp(means, weights, n_components, rng):
     else:
         sample = np.sort(rng.choice(len(means), _KMEANS_SAMPLE, replace=False))
         labels = kmeans.fit(means[sample], sample_weight=weights[sample]).predict(means)
+    return functools.partial(_hard_resp, labels)
 
-    def block(rows, out):
-        out.fill(0.0)
-        out[labels[rows], np.arange(out.shape[1])] = 1.0
-        return out
-    return block
+
+def _hard_resp(labels, rows, out):
+    """One-hot responsibilities (n_components, n_rows) of the primitives ``rows`` from their ``labels``, in ``out``."""
+    out.fill(0.0)
+    out[labels[rows], np.arange(out.shape[1])] = 1.0
+    return out
 
 
 def _random_resp(means, weights, n_components, rng):
-    """Uniform random soft responsibilities, normalised per primitive (drawn block after block)."""
-    def block(rows, out):
-        resp = rng.uniform(size=out.shape[::-1])  # a row per primitive, drawn in primitive order
-        return np.divide(resp.T, resp.sum(axis=1), out=out)
-    return block
+    """Uniform random soft responsibilities, normalised per primitive: :func:`_uniform_resp` drawing from ``rng``."""
+    return functools.partial(_uniform_resp, rng)
 
 
-# init -> function(means, weights, n_components, rng) -> block(rows, out) -> responsibilities of rows, in out
+def _uniform_resp(rng, rows, out):
+    """Responsibilities (n_components, n_rows) of the primitives ``rows``, uniform random numbers normalised per
+    primitive, in ``out``; a row per primitive drawn in primitive order (blocks run in order on one thread)."""
+    resp = rng.uniform(size=out.shape[::-1])
+    return np.divide(resp.T, resp.sum(axis=1), out=out)
+
+
+def _init_block_sums(inputs, resp, rows, out):
+    """:func:`_m_step_sums` of the initial responsibilities ``resp(rows, out)`` of the primitives ``rows``."""
+    return _m_step_sums(resp(rows, out), inputs.table[rows, :-1], inputs.mstep_weights[rows])
+
+
+# init -> function(means, weights, n_components, rng) -> resp(rows, out): responsibilities of rows, in out
 _INIT_RESP = {"kmeans": _kmeans_resp, "random": _random_resp}
 
 
@@ -650,9 +592,9 @@ class GaussianMixture(DensityMixin, BaseEstimator):
         The bound after each iteration (but the last when ``tol`` is None); ``history_[-1] == lower_bound_``
         when it is not empty.
     e_step_params_ : tuple of ndarray
-        ``(weights, means, covariances, precisions_cholesky)`` (the last two (K, d, d) matrices) whose E-step gave the responsibilities of the last
-        M-step (the parameters before it): with ``dgmm.mixture.responsibilities`` they take a primitive's share out
-        of that M-step exactly, as :mod:`dgmm.odometry.measured_cut` does.
+        ``(weights, means, covariances, precisions_cholesky)`` (the last two (K, d, d) matrices) whose E-step gave
+        the responsibilities of the last M-step (the parameters before it): with ``dgmm.mixture.responsibilities``
+        they take a primitive's share out of that M-step exactly, as :mod:`dgmm.odometry.measured_cut` does.
     """
 
     def __init__(self, n_components=1, *, covariance_type="full", init="kmeans", max_iter=25, tol=1e-12,
@@ -707,15 +649,14 @@ class GaussianMixture(DensityMixin, BaseEstimator):
             raise InputError(f"n_components={self.n_components} is larger than the {n_present} primitives of "
                              f"positive size (n_samples = {n_present})")
 
-    def _initial_params(self, prims, centre, unit, table, mstep_weights, blocks, rng):
+    def _initial_params(self, prims, centre, inputs, blocks, rng):
         """Starting (weights, means, precision Choleskys) in internal units: from ``init``, replaced by user
         values."""
-        k, d = self.n_components, prims.dimension
+        k, d, unit = self.n_components, prims.dimension, inputs.unit
         user = (self.weights_init, self.means_init, self.precisions_init)
         if any(value is None for value in user):
-            resp = _INIT_RESP[self.init](prims.means / unit, mstep_weights, k, rng)
-            sums = blocks.run(lambda rows, out: _m_step_sums(resp(rows, out), table[rows, :-1], mstep_weights[rows]),
-                              threads=False)
+            resp = _INIT_RESP[self.init](prims.means / unit, inputs.mstep_weights, k, rng)
+            sums = blocks.run(functools.partial(_init_block_sums, inputs, resp), threads=False)
             weights, means, prec_chol, _ = _m_step(sums, self.reg_covar / unit**2, self.covariance_type)
         if self.weights_init is not None:
             weights = _check_array("weights_init", self.weights_init, (k,))
@@ -779,7 +720,7 @@ class GaussianMixture(DensityMixin, BaseEstimator):
         row_floats = 2 * table.shape[1] + 2
         with BlockPass(len(prims), self.n_components, self.memory_limit, self.n_jobs, row_floats) as blocks:
             try:
-                params = self._initial_params(prims, centre, unit, table, mstep_weights, blocks, rng)
+                params = self._initial_params(prims, centre, inputs, blocks, rng)
                 del prims  # the loop needs only the moment table (the caller may still hold the input)
                 sums, bound = _e_step(inputs, params, blocks)
                 _check_bound(bound)

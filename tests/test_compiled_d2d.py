@@ -37,7 +37,7 @@ def test_cost_is_the_sum_over_every_pair(surface_mixtures):
         s = fixed.covariances[:, None] + (rotation @ moving.covariances @ rotation.T)[None, :]
         log_terms = (np.log(fixed.weights)[:, None] + np.log(moving.weights)[None, :]
                      - 0.5 * np.einsum("ijk,ijk->ij", y, np.linalg.solve(s, y[..., None])[..., 0]))
-        assert np.mean(log_terms < log_terms.max() - d2d.NEGLIGIBLE) > 0.5
+        assert np.mean(log_terms < log_terms.max() - d2d.SCREEN) > 0.5
         cost = d2d.d2d_pose_cost(tables)(rotation, translation)[0]  # x -> R (x - c) + c + t'
         assert cost == pytest.approx(-np.exp(log_terms).sum(), rel=1e-12)
 

@@ -12,8 +12,9 @@ from sklearn.mixture import GaussianMixture
 
 from dgmm import registration as reg
 from dgmm.compiled import registration as kernels
+from dgmm.gaussian import SCREEN, quadratic_features
 from dgmm.registration import p2d
-from dgmm.registration.fitted import FittedMixture, quadratic_features
+from dgmm.registration.fitted import FittedMixture
 from dgmm.registration.p2d import p2d_pose_cost
 from dgmm.registration.rotations import rotation_and_jacobian
 
@@ -48,7 +49,7 @@ def test_bunny_terms_equal_the_numpy_reference_at_random_poses(bunny_mixture):
     """K=100 on the bunny, where most pairs lie beyond the screen: it is tested as well as the arithmetic."""
     vertices, mixture = bunny_mixture
     log_density = quadratic_features(vertices - mixture.origin) @ mixture.log_density_table
-    assert np.mean(log_density < log_density.max(axis=1, keepdims=True) - kernels.SCREEN) > 0.5
+    assert np.mean(log_density < log_density.max(axis=1, keepdims=True) - SCREEN) > 0.5
     compiled, reference = _both(vertices, mixture)
     rng = np.random.default_rng(0)
     for angle in (0.0, 5.0, 15.0):
@@ -83,11 +84,11 @@ def test_a_points_terms_do_not_depend_on_its_block(bunny_mixture):
     local = np.ascontiguousarray(vertices[:70] - vertices[:70].mean(axis=0))
     table = mixture.log_density_table
     buffers = kernels.p2d_pose_buffers(len(local), table.shape[1])
-    kernels.p2d_negative_mean_log_likelihood(local, rotation, shift, table, *buffers)
+    kernels.p2d_negative_mean_log_likelihood(local, rotation, shift, table, SCREEN, *buffers)
     starts, components, terms, sums = buffers[2:]
     for n in range(len(local)):
         alone = kernels.p2d_pose_buffers(1, table.shape[1])
-        kernels.p2d_negative_mean_log_likelihood(local[n:n + 1], rotation, shift, table, *alone)
+        kernels.p2d_negative_mean_log_likelihood(local[n:n + 1], rotation, shift, table, SCREEN, *alone)
         kept = slice(starts[n], starts[n + 1])
         np.testing.assert_array_equal(alone[3][:alone[2][1]], components[kept])
         np.testing.assert_array_equal(alone[4][:alone[2][1]], terms[kept])
@@ -153,13 +154,14 @@ def test_bfgs_poses_equal_the_numpy_path(bunny_mixture):
 
 
 def test_loading_the_kernels_leaves_nothing_for_a_registration_to_load():
-    """What the sweep's job server calls before forking its jobs (dgmm.compiled.load_p2d_kernels) loads every kernel
-    specialisation that P2D's solvers then run on a fitted scikit-learn mixture: a fresh process, so that no other
-    test has loaded them first."""
+    """What the sweep's job server calls before forking its jobs (dgmm.registration.p2d.load_p2d_kernels) loads every
+    kernel specialisation that P2D's solvers then run on a fitted scikit-learn mixture: a fresh process, so that no
+    other test has loaded them first."""
     program = """
 import numpy as np
 from sklearn.mixture import GaussianMixture
-from dgmm.compiled import load_p2d_kernels, registration as kernels
+from dgmm.compiled import registration as kernels
+from dgmm.registration.p2d import load_p2d_kernels
 from dgmm.registration import register_p2d, register_p2d_coarse_to_fine
 load_p2d_kernels()
 names = [name for name in dir(kernels) if hasattr(getattr(kernels, name), "signatures")]

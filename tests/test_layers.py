@@ -14,7 +14,7 @@ from conftest import REPO
 
 EXPERIMENTS, RUNTIME = "dgmm.experiments", "dgmm.runtime"
 JOB_SCRIPTS = frozenset(path.stem for path in (REPO / "workflow" / "scripts").glob("*.py"))
-MAX_TOP_LEVEL_MODULES = 12
+MAX_TOP_LEVEL_MODULES = 13
 
 
 def module_name(path, root):
@@ -67,6 +67,18 @@ def layer_violations(root):
 
 def test_no_module_imports_across_floors():
     assert layer_violations(REPO) == []
+
+
+# Within the library: the numba kernels sit below the code that calls them, the recorders beside the odometry.
+BELOW = {"dgmm.compiled": ("dgmm.mixture", "dgmm.registration", "dgmm.odometry", "dgmm.recording"),
+         "dgmm.recording": ("dgmm.odometry",)}
+
+
+def test_the_kernels_and_the_recorders_import_nothing_above_them():
+    upward = [f"{name} imports {imported}" for path in sorted((REPO / "dgmm").rglob("*.py"))
+              for name in [module_name(path, REPO)] for lower, uppers in BELOW.items() if within(name, lower)
+              for imported in sorted(imported_names(path, name)) if any(within(imported, up) for up in uppers)]
+    assert upward == []
 
 
 def test_the_top_level_holds_the_library_s_modules_and_the_floors():

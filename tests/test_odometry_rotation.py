@@ -18,6 +18,7 @@ from dgmm.odometry import (CAMERAS, first_frames, groundtruth_at_frames, pixel_p
                            run_odometry)
 from dgmm.odometry.em_start import lloyd_start
 from dgmm.odometry.frame_model import REG_COVAR, SCHEDULES, _fit_mixture
+from dgmm.odometry.schedule_studies import STUDY_SCHEDULES, schedule_named
 from dgmm.odometry.measured_cut import register_cut_rounds, register_measured
 from dgmm.odometry.overlap import register_d2d_overlap, seen_by
 from dgmm.odometry.pixels import FR3
@@ -107,7 +108,7 @@ def test_gauss_newton_d2d_holds_where_bfgs_jumps_out_of_the_basin():
     # As write_spun_sequence stores them: 16-bit PNG depth, 1/5000 m.
     prims = [pixel_primitives(np.rint(rotated_depth(sequence.depth(i), turns[i], ROS) * DEPTH_SCALE) / DEPTH_SCALE,
                               ROS) for i in (28, 29)]
-    schedule = SCHEDULES["fast"]
+    schedule = STUDY_SCHEDULES["fast"]
     with threadpool_limits(1):
         for variant in ("textbook", "authors"):
             options = dict(schedule=schedule, n_components=100, variant=variant, warm_iter=None)
@@ -191,11 +192,11 @@ def test_registration_on_the_common_view_holds_where_whole_mixtures_slide(bunny_
     rounds on the primitives each frame measures of the other; one round leaves it 6.5 cm off with textbook EM) and
     ``common-view`` (the overlap coarse to fine, then both frames refitted twice on their common view)."""
     sequence = _spinning_room(tmp_path / "spin", room_scene([bunny_res4.triangles]), 2)
-    whole = _frame_errors(sequence, SCHEDULES["fast"], variant)[0]
+    whole = _frame_errors(sequence, STUDY_SCHEDULES["fast"], variant)[0]
     print(f"\n{variant}: whole mixtures {whole[0]:.2f}° {100 * whole[1]:.2f} cm", end="")
     assert whole[0] > MAX_DEG or whole[1] > MAX_M
     for name in ("overlap", "common-view"):
-        degrees, metres = _frame_errors(sequence, SCHEDULES[name], variant)[0]
+        degrees, metres = _frame_errors(sequence, schedule_named(name), variant)[0]
         print(f", {name} {degrees:.2f}° {100 * metres:.2f} cm", end="")
         assert degrees < MAX_DEG and metres < MAX_M
 
@@ -240,7 +241,7 @@ def test_no_gross_failure_on_the_spinning_room(bunny_res4, tmp_path):
     sequence = _spinning_room(tmp_path / "spin", room_scene([bunny_res4.triangles]), 40)
     for variant in ("textbook", "authors"):
         errors = _frame_errors(sequence, SCHEDULES["overlap"], variant)
-        plain = _frame_errors(sequence, SCHEDULES["fast"], variant)
+        plain = _frame_errors(sequence, STUDY_SCHEDULES["fast"], variant)
         print(f"\n{variant}: overlap worst {errors[:, 0].max():.2f}° {100 * errors[:, 1].max():.2f} cm; fast: "
               f"{np.sum((plain[:, 0] > MAX_DEG) | (plain[:, 1] > MAX_M))} frames off", end="")
         assert errors[:, 0].max() < MAX_DEG and errors[:, 1].max() < MAX_M

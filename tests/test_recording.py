@@ -396,7 +396,8 @@ def test_odometry_recorder_writes_trajectories_and_its_blueprint(tmp_path):
     model = GaussianMixture(3, max_iter=5, random_state=0).fit(blobs(seed=3, n_per_blob=30))
     mcap_path, rrd_path = tmp_path / "odometry.mcap", tmp_path / "odometry.rrd"
     depth = np.full((480, 640), 1.2345)  # metres: logged at every 4th pixel in millimetres, 1235
-    with OdometryRecorder(mcap_path, rrd_path, groundtruth=truth, camera_frame="depth_optical") as recorder:
+    with OdometryRecorder(mcap_path, rrd_path, groundtruth=truth, camera_frame="depth_optical",
+                          pixel_step=4) as recorder:
         for index in range(n_frames):
             registration = None if index == 0 else Registration(np.eye(3), np.zeros(3), 4, 0.01, 1.5, True, "d2d")
             recorder(OdometryFrame(index, float(truth.timestamps[index]), rotations[index], translations[index],

@@ -225,7 +225,7 @@ def surface_mixtures(bunny_res4):
 
 
 def test_d2d_pair_screen_keeps_every_pair_within_its_bound(surface_mixtures):
-    """The screen (``PairTables.candidates``) may drop a pair only if its term is below ``e^-NEGLIGIBLE`` times
+    """The screen (``PairTables.candidates``) may drop a pair only if its term is below ``e^-SCREEN`` times
     the largest: checked against every pair's exact term. A third of the 8000 pairs are dropped (a screen that
     drops none would make this test vacuous), and thousands lie between ``e^-50`` and ``e^-5`` of the largest,
     so a screen that drops pairs it should keep (a wrong bound, a wrong threshold) fails."""
@@ -236,7 +236,7 @@ def test_d2d_pair_screen_keeps_every_pair_within_its_bound(surface_mixtures):
     moved = (moving.means_ - centre) @ rotation.T + centre + translation
     kept = np.zeros(log_terms.shape, dtype=bool)
     kept[tables.candidates(moved, rotation @ moving.covariances_ @ rotation.T)] = True
-    needed = log_terms >= log_terms.max() - d2d.NEGLIGIBLE
+    needed = log_terms >= log_terms.max() - d2d.SCREEN
     assert np.count_nonzero(~kept) > 2000  # the screen is at work
     assert np.count_nonzero(needed & (log_terms < log_terms.max() - 5)) > 2000  # pairs near the edge exist
     assert np.all(kept[needed]), f"{np.count_nonzero(needed & ~kept)} pairs within e^-50 dropped"
@@ -244,7 +244,7 @@ def test_d2d_pair_screen_keeps_every_pair_within_its_bound(surface_mixtures):
 
 def test_d2d_cost_and_derivatives_with_the_screen_equal_the_unscreened_ones(surface_mixtures, monkeypatch):
     """Cost against the sum over all pairs computed here, gradient against its central differences; gradient,
-    Gauss-Newton matrix and Hessian against the same code with the screen off (``NEGLIGIBLE`` infinite). Dropped
+    Gauss-Newton matrix and Hessian against the same code with the screen off (``SCREEN`` infinite). Dropped
     pairs are below ``e^-50`` (2e-22) of the largest term each, so the costs agree to rounding (1e-12 relative)
     and the gradients to the differences' error (1e-7); keeping only pairs within ``e^-5`` of the largest
     changes the cost by 5e-3 of it and the gradient by more than 1e-4 (both tried)."""
@@ -261,7 +261,7 @@ def test_d2d_cost_and_derivatives_with_the_screen_equal_the_unscreened_ones(surf
     numeric = _central_differences(all_pairs_cost, np.zeros(6), 1e-6)
     np.testing.assert_allclose(screened[0], numeric, rtol=0, atol=1e-7 * np.linalg.norm(numeric))
     expected = all_pairs_cost(np.zeros(6))
-    monkeypatch.setattr(d2d, "NEGLIGIBLE", np.inf)
+    monkeypatch.setattr(d2d, "SCREEN", np.inf)
     unscreened_cost, unscreened = evaluate(rotation, translation)
     assert unscreened_cost == pytest.approx(expected, rel=1e-12)
     for ours, reference in zip(screened, unscreened()):

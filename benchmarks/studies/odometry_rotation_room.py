@@ -31,7 +31,8 @@ import trimesh
 from threadpoolctl import threadpool_limits
 
 from dgmm.odometry import frame_motions, groundtruth_at_frames, pixel_primitives, read_sequence, run_odometry
-from dgmm.odometry.frame_model import SCHEDULES, _fit_mixture
+from dgmm.odometry.frame_model import _fit_mixture
+from dgmm.odometry.schedule_studies import STUDY_SCHEDULES
 from dgmm.odometry.overlap import register_d2d_overlap, seen_by
 from dgmm.odometry.pixels import FR3, PIXEL_STEP, backproject
 from dgmm.odometry.synthetic import (MAX_INCIDENCE_DEG, MAX_RANGE, MIN_RANGE, render_depth, room_scene,
@@ -66,7 +67,7 @@ def main():
     parser.add_argument("--n-frames", type=int, default=40)
     parser.add_argument("--strategies", nargs="+", default=["identity", "overlap2", "c2f", "truth", "fov-truth", "icp"])
     parser.add_argument("--schedules", nargs="*", default=[],
-                        help="run by run_odometry: SCHEDULES names or odometry_schedules.py's specs")
+                        help="run by run_odometry: schedule names or odometry_schedules.py's specs")
     parser.add_argument("--variants", nargs="+", default=["textbook", "authors"])
     parser.add_argument("--scales", type=float, nargs="+", default=[0.3, 0.15, 0.08, 0.04, 0.0],
                         help="c2f: standard deviations (m) added to every component, stage by stage, ending 0")
@@ -87,7 +88,7 @@ def main():
     print("| strategy | EM | off (>2° or >3 cm) | worst (deg, cm) | median (deg, cm) | CPU ms per registration "
           "(schedules: per frame, fits included) |")
     print("|---|---|---|---|---|---|")
-    schedule = SCHEDULES["fast"]
+    schedule = STUDY_SCHEDULES["fast"]
     table = {}
     with threadpool_limits(1):
         depths = noise_free_depths(truth, n) if args.noise_free else [sequence.depth(i) for i in range(n)]

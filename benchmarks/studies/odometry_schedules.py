@@ -2,9 +2,10 @@
 
 On one BLAS thread (as the workflow's jobs run), over the first N depth frames of a TUM sequence (fr1/xyz from the
 mirror by default, all 798 frames): each method and EM variant under each schedule, a name of
-``dgmm.odometry.frame_model.SCHEDULES`` or ``SEED_SAMPLE:LLOYD_ITER:EM_ITER:SOLVER`` (a ``Schedule``; SEED_SAMPLE
-``all`` for scikit-learn's k-means on every primitive), optionally followed by ``:OVERLAP_ROUNDS``,
-``:SCALE,SCALE,...`` and ``:REFITS`` (the overlap fields), and by ``+cutN`` (``cut_rounds``; ``+cut`` is one).
+``dgmm.odometry.frame_model.SCHEDULES`` or ``dgmm.odometry.schedule_studies.STUDY_SCHEDULES``, or
+``SEED_SAMPLE:LLOYD_ITER:EM_ITER:SOLVER`` (a ``Schedule``; SEED_SAMPLE ``all`` for scikit-learn's k-means on every
+primitive), optionally followed by ``:OVERLAP_ROUNDS``, ``:SCALE,SCALE,...`` and ``:REFITS`` (the overlap fields),
+and by ``+cutN`` (``cut_rounds``; ``+cut`` is one).
 Prints one markdown row per run: ATE RMSE, the one-second RPE, the slope of the estimated on the true translation
 over 10 frames (below 1: the motion is under-measured), CPU seconds per frame (fit + D2D; the machine may be shared,
 so CPU time, not wall time) and the worst frame-to-frame error against the ground truth.
@@ -23,18 +24,21 @@ from threadpoolctl import threadpool_limits
 from dgmm.odometry import CAMERAS, first_frames, frame_motions, read_sequence, relative_pose_error, run_odometry
 from dgmm.odometry import absolute_trajectory_error, sequence_intrinsics
 from dgmm.odometry.frame_model import SCHEDULES, Schedule
+from dgmm.odometry.schedule_studies import STUDY_SCHEDULES
 from dgmm.registration import rotation_distance_deg
 
 FR1_XYZ = Path(__file__).resolve().parents[3] / "shared" / "data" / "tum" / "rgbd_dataset_freiburg1_xyz"
 
 
 def parse_schedule(text):
-    """A SCHEDULES name, or ``SEED_SAMPLE:LLOYD_ITER:EM_ITER:SOLVER[:OVERLAP_ROUNDS[:SCALE,...[:REFITS]]]``; the
-    suffix ``+cutN`` sets ``cut_rounds`` to N (``+cut``: 1)."""
+    """A name of SCHEDULES or STUDY_SCHEDULES, or
+    ``SEED_SAMPLE:LLOYD_ITER:EM_ITER:SOLVER[:OVERLAP_ROUNDS[:SCALE,...[:REFITS]]]``; the suffix ``+cutN`` sets
+    ``cut_rounds`` to N (``+cut``: 1)."""
     text, _, rounds = text.partition("+cut")
     cut = int(rounds or 1) if _ else 0
-    if text in SCHEDULES:
-        return dataclasses.replace(SCHEDULES[text], cut_rounds=cut or SCHEDULES[text].cut_rounds)
+    named = {**SCHEDULES, **STUDY_SCHEDULES}
+    if text in named:
+        return dataclasses.replace(named[text], cut_rounds=cut or named[text].cut_rounds)
     sample, lloyd_iter, em_iter, solver, *overlap = text.split(":")
     rounds = int(overlap[0]) if overlap else 0
     scales = tuple(float(scale) for scale in overlap[1].split(",")) if len(overlap) > 1 else (0.0,)

@@ -59,7 +59,7 @@ def screened_e_step_sums(features, coefficients, moments, row_weights, screen, l
     features : ndarray of shape (n_rows, 11)
         The scaled moment table's rows (``dgmm.mixture._scaled_table``).
     coefficients : ndarray of shape (11, n_components)
-        ``dgmm.mixture._component_coefficients``, transposed: ``log rho = features @ coefficients``.
+        ``dgmm.gaussian.log_density_coefficients``, transposed: ``log rho = features @ coefficients``.
     moments : ndarray of shape (n_rows, 10)
         The unscaled moment table's columns 0-9.
     row_weights : ndarray of shape (n_rows,)

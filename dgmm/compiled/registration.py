@@ -2,14 +2,14 @@
 
 - P2D (:func:`dgmm.registration.p2d.p2d_pose_cost` for Gauss-Newton, :func:`~dgmm.registration.p2d.p2d_params_cost` for
   BFGS) spends its time in the likelihood of every trial pose: ``n_points x n_components`` exponentials. A point's
-  responsibility ``e^{l_nk - max_k l_nk}`` under a component more than :data:`SCREEN` nats below its best adds less than
-  half a unit in the last place to the point's sum (which is at least 1), so the P2D kernels compute every log-density
-  (10 multiply-adds) but the exponential and the moments only of the pairs within :data:`SCREEN`.
+  responsibility ``e^{l_nk - max_k l_nk}`` under a component more than :data:`dgmm.gaussian.SCREEN` nats below its best
+  adds less than half a unit in the last place to the point's sum (which is at least 1), so the P2D kernels compute
+  every log-density (10 multiply-adds) but the exponential and the moments only of the pairs within the screen.
 - D2D (:func:`dgmm.registration.d2d.d2d_pose_cost`, odometry's inner loop): the numpy D2D bounds every pair's term
   before computing the ones that may matter, then works on arrays of a few hundred to a few thousand pairs, and at
   odometry's sizes (K = 100 per frame) its time goes to numpy's per-call overhead. Here every pair's exact term is
   computed in one pass (about 50 floating-point operations a pair), and the derivatives run over the pairs within
-  ``e^-negligible`` of the largest term, the pairs the numpy derivatives keep.
+  ``e^-screen`` of the largest term, the pairs the numpy derivatives keep.
 
 The numpy functions stay the reference (``p2d_pose_cost(compiled=False)``, ``p2d_params_cost(compiled=False)``,
 ``d2d_pose_cost(compiled=False)``, tested against these). The kernels and the 3x3 helpers they call live in this one
@@ -65,10 +65,6 @@ def _add_pose_matrix(skew_p, weight, scale, cross, out):
 
 # ---- P2D
 
-SCREEN = 50.0
-"""Pairs with ``l_nk < max_k l_nk - SCREEN`` are left out: ``e^-50 ~ 2e-22``, so even 10⁵ of them add under
-``2e-17`` to a sum of at least 1, below half its last place (``1.1e-16``)."""
-
 BLOCK = 32
 """Points whose log-densities :func:`p2d_negative_mean_log_likelihood` computes together: the loop over a block's
 points vectorises with each component's 10 coefficients held in registers. One bunny cost (453 points, K=100, AVX-512)
@@ -85,13 +81,13 @@ def p2d_pose_buffers(n_points, n_components):
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def p2d_negative_mean_log_likelihood(local, rotation, shift, table, rotated, offsets, starts, components, terms,
-                                     sums):
+def p2d_negative_mean_log_likelihood(local, rotation, shift, table, screen, rotated, offsets, starts, components,
+                                     terms, sums):
     """``-1/n Σ_n log Σ_k π_k N(y_n | μ_k, Σ_k)`` of the points ``y_n = R x_n + shift + origin``.
 
-    A block of :data:`BLOCK` points at a time: their :func:`~dgmm.registration.fitted.quadratic_features`, every
+    A block of :data:`BLOCK` points at a time: their :func:`~dgmm.gaussian.quadratic_features`, every
     log-density ``l_nk`` (the features times the table's column, summed in the table's row order: a point's values do
-    not depend on its block) and each point's largest; then, point by point, the pairs within :data:`SCREEN`, in
+    not depend on its block) and each point's largest; then, point by point, the pairs within ``screen``, in
     component order.
 
     Parameters
@@ -103,9 +99,11 @@ def p2d_negative_mean_log_likelihood(local, rotation, shift, table, rotated, off
         ``c + t' - origin``.
     table : ndarray of shape (10, n_components)
         :attr:`~dgmm.registration.fitted.FittedMixture.log_density_table`.
+    screen : float
+        :data:`dgmm.gaussian.SCREEN`: pairs with ``l_nk < max_k l_nk - screen`` are left out.
     rotated, offsets, starts, components, terms, sums : ndarray
         The :func:`p2d_pose_buffers`, filled: ``rotated`` with ``R x_n``, ``offsets`` with ``y_n - origin``, and
-        the pairs within :data:`SCREEN`: point ``n``'s are ``components[starts[n]:starts[n + 1]]``, with
+        the pairs within ``screen``: point ``n``'s are ``components[starts[n]:starts[n + 1]]``, with
         ``e^{l_nk - max_k l_nk}`` in ``terms`` and their sum in ``sums[n]``.
     """
     n_points, n_components = local.shape[0], table.shape[1]
@@ -124,7 +122,7 @@ def p2d_negative_mean_log_likelihood(local, rotation, shift, table, rotated, off
                 offsets[n, a] = rotated[n, a] + shift[a]
             x, y, z = offsets[n, 0], offsets[n, 1], offsets[n, 2]
             features[0, j], features[1, j], features[2, j] = x * x, y * y, z * z
-            features[3, j], features[4, j], features[5, j] = x * y, x * z, y * z
+            features[3, j], features[4, j], features[5, j] = x * y * 2.0, x * z * 2.0, y * z * 2.0
             features[6, j], features[7, j], features[8, j] = x, y, z
         tops[:] = -np.inf
         for k in range(n_components):
@@ -139,7 +137,7 @@ def p2d_negative_mean_log_likelihood(local, rotation, shift, table, rotated, off
         for j in range(size):
             n = first + j
             top = tops[j]
-            threshold = top - SCREEN
+            threshold = top - screen
             starts[n] = count
             for k in range(n_components):
                 if log_density[k, j] > threshold:
@@ -350,9 +348,9 @@ def _inverse_and_exponent(fixed_covariance, moving_covariance, y, inverse):
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def d2d_negative_overlap(fixed_means, fixed_covariances, moved, moved_covariances, log_weights, negligible, floor,
+def d2d_negative_overlap(fixed_means, fixed_covariances, moved, moved_covariances, log_weights, screen, floor,
                          count, fixed_index, moving_index, log_terms):
-    """The D2D cost ``-Σᵢⱼ πᵢ πⱼ exp(-½ yᵢⱼᵀ Sᵢⱼ⁻¹ yᵢⱼ)`` over the pairs within ``e^-negligible`` of the largest
+    """The D2D cost ``-Σᵢⱼ πᵢ πⱼ exp(-½ yᵢⱼᵀ Sᵢⱼ⁻¹ yᵢⱼ)`` over the pairs within ``e^-screen`` of the largest
     term, which it leaves in the :func:`d2d_kept_pairs` buffers.
 
     Parameters
@@ -365,8 +363,8 @@ def d2d_negative_overlap(fixed_means, fixed_covariances, moved, moved_covariance
         ``R Σⱼ Rᵀ``.
     log_weights : ndarray of shape (n_fixed, n_moving)
         ``log πᵢ + log πⱼ``.
-    negligible, floor : float
-        :data:`dgmm.registration.d2d.NEGLIGIBLE` and the numpy cost's exponent floor
+    screen, floor : float
+        :data:`dgmm.gaussian.SCREEN` and the numpy cost's exponent floor
         (:data:`dgmm.registration.fitted.EXP_FLOOR`).
     count, fixed_index, moving_index, log_terms : ndarray
         The buffers.
@@ -386,7 +384,7 @@ def d2d_negative_overlap(fixed_means, fixed_covariances, moved, moved_covariance
     kept = 0
     cost = 0.0
     for pair in range(n_fixed * n_moving):
-        if exponents[pair] >= top - negligible:
+        if exponents[pair] >= top - screen:
             fixed_index[kept], moving_index[kept] = pair // n_moving, pair % n_moving
             log_terms[kept] = exponents[pair]
             cost -= math.exp(exponents[pair])

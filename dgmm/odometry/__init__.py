@@ -15,6 +15,7 @@ The public namespace; one concept per module:
 - :mod:`~dgmm.odometry.sklearn_em`: a frame's mixture fitted as scikit-learn's ``GaussianMixture`` at its defaults;
 - :mod:`~dgmm.odometry.frame_model`: each method's per-frame model (a GMM, or ICP's points), the per-frame
   schedules of the GMMs (EM start, EM iterations, D2D solver) and the registration of two frames;
+- :mod:`~dgmm.odometry.schedule_studies`: the experimental schedules the studies measured the sweep's against;
 - :mod:`~dgmm.odometry.em_start`: a frame's EM start under a sampled schedule (k-means++ seeds, Lloyd iterations);
 - :mod:`~dgmm.odometry.overlap`: D2D of two frames' mixtures on what both cameras see (robust to fast rotation);
 - :mod:`~dgmm.odometry.measured_cut`: D2D of two frames on the primitives each measures of the other;

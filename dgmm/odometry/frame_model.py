@@ -5,8 +5,8 @@ and registers with the determinant-free D2D cost; ``"gmm-points"`` does the same
 points; ``"icp"`` keeps 2,500 points drawn at random from each frame's back-projection for point-to-point ICP.
 
 Schedules (:data:`SCHEDULES`): the paper does not state how each frame's EM starts or how long it runs, nor its
-odometry's solver, so the sweep's schedule is chosen by measurement (``benchmarks/studies/odometry_schedules.py``)
-and the code before that choice is kept as ``"reference"``. Every frame's start is drawn from its own seed.
+odometry's solver, so the sweep's schedule is chosen by measurement (``benchmarks/studies/odometry_schedules.py``,
+against the alternatives of :mod:`dgmm.odometry.schedule_studies`). Every frame's start is drawn from its own seed.
 
 Warm start (``warm_iter``): every frame after the first starts from the previous frame's mixture (its starved
 components restarted on the data) and runs ``warm_iter`` iterations. It under-measures the motion: a few EM
@@ -16,11 +16,12 @@ the shortfall compounds into drift (measured: docs/studies/odometry_constants.md
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
 from dgmm.errors import InputError
+from dgmm.gaussian import SCREEN
 from dgmm.mixture import GaussianMixture
 from dgmm.odometry.em_start import lloyd_start
 from dgmm.odometry.measured_cut import MeasuredFrame, register_cut_rounds
@@ -50,11 +51,6 @@ CUT_TOL = 1e-3
 fr1/xyz's radius of about 1 m; :func:`dgmm.odometry.measured_cut.register_cut_rounds`): the ATE stays within the
 seed-to-seed spread of always running all three rounds, for a quarter less of the rounds' CPU (measured on fr1/xyz
 and the rotation-only room: docs/studies/odometry_constants.md)."""
-
-E_STEP_SCREEN = 50.0
-"""Every frame's EM leaves out the pairs below ``e^-50`` of a pixel's best component (``GaussianMixture(screen=50)``):
-about 9 in 10 of a fr1/xyz frame's pairs at K = 100, each below rounding of its pixel's sum (measured:
-docs/benchmarks/odometry.md)."""
 
 STARVED_WEIGHT = 0.1
 """Warm start: a component of the previous frame's mixture whose weight is below ``STARVED_WEIGHT / K`` restarts."""
@@ -138,31 +134,21 @@ class Schedule:
             raise InputError(f"overlap_scales {self.overlap_scales} end widened: they need cut rounds after them")
 
 
-_FAST = Schedule(seed_sample=1024, lloyd_iter=3, em_iter=2, solver="gauss-newton")
-
 SCHEDULES = {
-    "overlap": replace(_FAST, overlap_rounds=1, overlap_scales=(0.0625,), cut_rounds=3),
-    "fast": _FAST,
-    "common-view": replace(_FAST, overlap_rounds=2, overlap_scales=(0.25, 0.125, 0.0625, 0.03125, 0.0),
-                           overlap_refits=2),
-    "reference": Schedule(seed_sample=None, lloyd_iter=0, em_iter=25, solver="bfgs"),
+    "overlap": Schedule(seed_sample=1024, lloyd_iter=3, em_iter=2, solver="gauss-newton", overlap_rounds=1,
+                        overlap_scales=(0.0625,), cut_rounds=3),
     "authors": Schedule(seed_sample=None, lloyd_iter=0, em_iter=SKLEARN_MAX_ITER, solver="bfgs", em_tol=SKLEARN_TOL),
 }
-"""Named per-frame schedules, chosen by measurement (benchmarks/studies/odometry_schedules.py,
-benchmarks/studies/odometry_rotation_room.py; the docs' Visual odometry section). ``"fast"``: k-means++ seeds from 1,024
-primitives, 3 Lloyd iterations and 2 EM iterations on every primitive, Gauss-Newton D2D of the whole mixtures.
-``"overlap"``, the sweep's default: the same mixtures, registered first on the components each camera sees of the
-other, widened by 0.0625 RMS radii (it keeps fast turns in the right basin), then up to three times, until the pose
-settles (:data:`CUT_TOL`), cut to the primitives each frame measures of the other at the pose so far and registered
-again (``cut_rounds``): what only one frame measured no longer pulls the estimate toward the identity.
-``"common-view"``: two overlap rounds at each of five widenings, then both frames refitted twice on the primitives
-the other camera sees (robust where views change fastest, at about five times the CPU). ``"reference"``:
-scikit-learn's k-means on every primitive, 25 EM iterations (the fitting experiments' count; the paper does not state
-the odometry's) and the paper's BFGS. ``"authors"``: the authors' notebooks' per-frame fit, scikit-learn's
-``GaussianMixture(100)`` at its defaults (k-means start, up to 100 iterations, ``tol`` 1e-3;
-:mod:`dgmm.odometry.sklearn_em`), and BFGS D2D of the whole mixtures from the identity (``reg_results.ipynb``); with
-unit pixel sizes and a ``patch`` or ``disparity`` covariance it is the authors' protocol
-(:mod:`dgmm.odometry.protocols`)."""
+"""The library's per-frame schedules: the sweep's, chosen by measurement, and the authors' protocol's (the studies'
+alternatives are in :mod:`dgmm.odometry.schedule_studies`). ``"overlap"``, the default: k-means++ seeds from 1,024
+primitives, 3 Lloyd iterations and 2 EM iterations on every primitive; Gauss-Newton D2D first on the components
+each camera sees of the other, widened by 0.0625 RMS radii (it keeps fast turns in the right basin), then up to
+three times, until the pose settles (:data:`CUT_TOL`), cut to the primitives each frame measures of the other at
+the pose so far and registered again (``cut_rounds``): what only one frame measured no longer pulls the estimate
+toward the identity. ``"authors"``: the authors' notebooks' per-frame fit, scikit-learn's ``GaussianMixture(100)``
+at its defaults (k-means start, up to 100 iterations, ``tol`` 1e-3; :mod:`dgmm.odometry.sklearn_em`), and BFGS D2D
+of the whole mixtures from the identity (``reg_results.ipynb``); with unit pixel sizes and a ``patch`` or
+``disparity`` covariance it is the authors' protocol (:mod:`dgmm.odometry.protocols`)."""
 
 
 def _fit_mixture(prims, rng, previous, options):
@@ -171,8 +157,9 @@ def _fit_mixture(prims, rng, previous, options):
     ``previous`` is the previous frame's mixture or ``None`` (see :func:`_warm_start`).
     """
     schedule, k = options["schedule"], options["n_components"]
+    # screened EM: the pairs left out are about 9 in 10 of a fr1/xyz frame's at K = 100 (docs/benchmarks/odometry.md)
     common = dict(variant=options["variant"], random_state=rng, reg_covar=REG_COVAR, memory_limit=EM_BLOCK_BYTES,
-                  screen=E_STEP_SCREEN)
+                  screen=SCREEN)
     if previous is not None and options["warm_iter"] is not None:
         weights, means, precisions = _warm_start(previous, prims, rng)
         return GaussianMixture(k, max_iter=options["warm_iter"], weights_init=weights, means_init=means,

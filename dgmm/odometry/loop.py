@@ -16,9 +16,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from dgmm.errors import DataError, InputError
-from dgmm.odometry.frame_model import METHODS, SCHEDULES, Schedule
+from dgmm.odometry.frame_model import METHODS, Schedule
 from dgmm.odometry.pixels import FR3
 from dgmm.odometry.protocols import PROTOCOLS, check_protocol
+from dgmm.odometry.schedule_studies import schedule_named
 from dgmm.odometry.tum import Trajectory
 from dgmm.registration import Registration
 
@@ -108,8 +109,8 @@ def run_odometry(sequence, method, frames=None, *, intrinsics=FR3, n_components=
     n_components : int
         GMM size (paper: K=100).
     schedule : str or Schedule, default="overlap"
-        How each frame's GMM starts and iterates and which D2D solver registers it: a key of
-        ``dgmm.odometry.frame_model.SCHEDULES`` or a ``Schedule``.
+        How each frame's GMM starts and iterates and which D2D solver registers it: a ``Schedule``, or its name in
+        ``dgmm.odometry.frame_model.SCHEDULES`` or the studies' (``dgmm.odometry.schedule_studies``).
     warm_iter : int, optional
         EM iterations of every frame after the first, started from the previous frame's mixture; None fits every
         frame from its own start, by ``schedule``.
@@ -149,16 +150,15 @@ def run_odometry(sequence, method, frames=None, *, intrinsics=FR3, n_components=
         if method not in settings.methods:
             raise InputError(f"protocol {protocol!r} applies to {', '.join(settings.methods)}, not {method!r}")
         schedule, size, covariance = settings.schedule or schedule, settings.size, settings.covariance
-    if not isinstance(schedule, Schedule) and schedule not in SCHEDULES:
-        raise InputError(f"schedule must be one of {sorted(SCHEDULES)} or a Schedule, got {schedule!r}")
+    if not isinstance(schedule, Schedule):
+        schedule = schedule_named(schedule)
     if warm_iter is not None and warm_iter < 1:
         raise InputError(f"warm_iter must be a positive number of EM iterations or None, got {warm_iter!r}")
     indices = np.arange(len(sequence)) if frames is None else np.asarray(frames, dtype=int)
     if len(indices) < 2 or indices.min() < 0 or indices.max() >= len(sequence) or np.any(np.diff(indices) <= 0):
         raise InputError(f"odometry needs at least 2 increasing frame indices in 0..{len(sequence) - 1}")
     prepare, register = METHODS[method]
-    options = {"n_components": n_components, "warm_iter": warm_iter,
-               "schedule": schedule if isinstance(schedule, Schedule) else SCHEDULES[schedule], "variant": variant,
+    options = {"n_components": n_components, "warm_iter": warm_iter, "schedule": schedule, "variant": variant,
                "size": size, "covariance": covariance, "n_icp_points": n_icp_points, "icp_tol": icp_tol,
                "intrinsics": intrinsics}
     rotations, translations = [np.eye(3)], [np.zeros(3)]

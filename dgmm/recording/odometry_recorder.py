@@ -40,9 +40,9 @@ class OdometryRecorder(Recording):
     rerun entities (``world`` is z-up, as TUM's and the synthetic ground truth are): ``world/groundtruth`` (static
     line strip), and on the sequence timeline ``frame`` and the timestamp timeline ``timestamp`` (the input's
     clock): ``world/estimated`` (the anchored path so far), ``world/camera`` (its pose), ``world/camera/image``
-    (the pinhole, static, and each frame's depth image at every 4th pixel, as the odometry samples it, in
-    millimetres), ``world/camera/model`` (the frame's mixture as ellipsoids in camera coordinates, or ICP's
-    points), ``seconds/model`` and ``seconds/registration``.
+    (the pinhole, static, and each frame's depth image at every ``pixel_step``-th pixel, in millimetres),
+    ``world/camera/model`` (the frame's mixture as ellipsoids in camera coordinates, or ICP's points),
+    ``seconds/model`` and ``seconds/registration``.
 
     Parameters
     ----------
@@ -57,19 +57,21 @@ class OdometryRecorder(Recording):
     camera_frame : str, default="camera"
         The depth camera's frame name (``DepthSequence.camera_frame``).
     n_sigma : float, default=2.0
+    pixel_step : int, default=1
+        The depth images are logged at every ``pixel_step``-th pixel (``dgmm.odometry.pixels.PIXEL_STEP``: as the
+        odometry samples them).
 
     Examples
     --------
-    >>> with OdometryRecorder("odometry.mcap", "odometry.rrd", groundtruth=truth) as recorder:  # doctest: +SKIP
+    >>> with OdometryRecorder("odometry.mcap", "odometry.rrd", groundtruth=truth,
+    ...                       pixel_step=PIXEL_STEP) as recorder:  # doctest: +SKIP
     ...     result = run_odometry(sequence, "gmm-pixels", frames, callback=recorder)
     ...     recorder.finish(result.trajectory)
     """
 
     def __init__(self, mcap_path, rrd_path=None, *, params=None, groundtruth=None, intrinsics=None,
-                 camera_frame="camera", n_sigma=DEFAULT_N_SIGMA):
-        from dgmm.odometry.pixels import PIXEL_STEP  # here: `import dgmm.recording` stays without the odometry
-
-        self._step = PIXEL_STEP
+                 camera_frame="camera", n_sigma=DEFAULT_N_SIGMA, pixel_step=1):
+        self._step = pixel_step
         self.n_sigma = n_sigma
         self.groundtruth = groundtruth
         self.camera_frame = camera_frame
@@ -89,7 +91,7 @@ class OdometryRecorder(Recording):
                 if groundtruth is not None:
                     self._rerun.log("world/groundtruth", rr.LineStrips3D([groundtruth.translations],
                                                                          colors=_GROUNDTRUTH_COLOR))
-                if intrinsics is not None:  # the pinhole of the images logged: every PIXEL_STEP-th pixel
+                if intrinsics is not None:  # the pinhole of the images logged: every pixel_step-th pixel
                     step = self._step
                     self._rerun.log("world/camera/image", rr.Pinhole(
                         focal_length=[intrinsics.fx / step, intrinsics.fy / step],

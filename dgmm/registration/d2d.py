@@ -13,16 +13,14 @@ from functools import partial
 
 import numpy as np
 
-from dgmm.registration.fitted import EXP_FLOOR, FULL_INDEX as _FULL, FittedMixture, quadratic_features
+from dgmm.gaussian import SCREEN, layout, quadratic_features, unpack
+from dgmm.registration.fitted import EXP_FLOOR, FittedMixture
 from dgmm.registration.pose import params_from_pose, pivot_pose
 from dgmm.registration.rotations import LEVI_CIVITA, rotation_and_jacobian
 from dgmm.registration.solvers import (TRANSLATION_UNIT, check_solver, minimise_bfgs, minimise_gauss_newton,
                                        pose_matrices)
 
-_ROWS, _COLS = np.array([0, 1, 2, 0, 0, 1]), np.array([0, 1, 2, 1, 2, 2])  # the 6 distinct entries of a symmetric 3x3
-NEGLIGIBLE = 50.0
-"""Pairs whose term is below ``e^-50`` (2e-22) times the largest are left out of the derivatives: fewer than 1e6
-pairs of them change the cost and its derivatives by less than rounding (tested against all pairs)."""
+_ROWS, _COLS = layout(3).rows, layout(3).cols  # the 6 distinct entries of a symmetric 3x3
 _SKEW = -np.transpose(LEVI_CIVITA, (2, 0, 1)).reshape(3, 9)
 """``a @ _SKEW`` is the cross-product matrix ``[a]x`` (``[a]x b = a x b``) of each row of ``a``, flattened to 9."""
 
@@ -77,11 +75,11 @@ class PairTables:
                    moving_covariances=moving.covariances,
                    log_weights=np.log(fixed.weights)[:, None] + np.log(moving.weights)[None, :],
                    inverse_widths=1.0 / (fixed_values[:, 2:] + moving_widths[None, :]), normals=normals,
-                   normal_outer=normals[:, _ROWS] * normals[:, _COLS] * np.where(_ROWS == _COLS, 1.0, 2.0),
+                   normal_outer=quadratic_features(normals)[:, :6],
                    thickness=fixed_values[:, 0], centre=centre)
 
     def candidates(self, moved, rotated_covariances):
-        """Indices ``(i, j)`` of the pairs whose term may be within ``e^-NEGLIGIBLE`` of the largest.
+        """Indices ``(i, j)`` of the pairs whose term may be within ``e^-SCREEN`` of the largest.
 
         Rigorous bounds, no exponent computed: ``S ≥ Σᵢ`` gives ``yᵀ S⁻¹ y ≤ yᵀ Σᵢ⁻¹ y`` (a lower bound of the largest
         term, every pair's at once from one product of P2D's :func:`quadratic_features` table); an upper bound of
@@ -100,7 +98,7 @@ class PairTables:
         bound = np.maximum(squared, along, out=squared)
         bound *= -0.5
         bound += self.log_weights
-        return np.divmod(np.flatnonzero(bound >= floor - NEGLIGIBLE), bound.shape[1])
+        return np.divmod(np.flatnonzero(bound >= floor - SCREEN), bound.shape[1])
 
 
 @dataclass(frozen=True)
@@ -157,7 +155,7 @@ def _derivatives(pairs, hessians):
     Hessian ``-Σ exp(E) (∇E ∇Eᵀ + ∇²E)``; its Gauss-Newton matrix keeps only ``Σ exp(E) Jᵀ S⁻¹ J`` (positive
     semi-definite).
     """
-    keep = np.flatnonzero(pairs.log_terms >= pairs.log_terms.max() - NEGLIGIBLE)
+    keep = np.flatnonzero(pairs.log_terms >= pairs.log_terms.max() - SCREEN)
     terms = np.exp(pairs.log_terms[keep])
     determinants = pairs.determinants[keep]
     v = (pairs.adjugate_y[:, keep] / determinants).T
@@ -168,7 +166,7 @@ def _derivatives(pairs, hessians):
     gradient = -(terms @ grad_log)
     if not hessians:
         return gradient
-    inverse = (pairs.adjugates[:, keep] / determinants).T[:, _FULL]  # S⁻¹, (n_pairs, 3, 3)
+    inverse = unpack((pairs.adjugates[:, keep] / determinants).T)  # S⁻¹, (n_pairs, 3, 3)
     (gauss_newton,) = pose_matrices(p, terms[:, None, None] * inverse)
     skew_v = (v @ _SKEW).reshape(-1, 3, 3)
     c_skew_v = c @ skew_v
@@ -255,7 +253,7 @@ def _compiled_pose_cost(tables):
         moved_covariances = rotation @ tables.moving_covariances @ rotation.T
         pairs = kernels.d2d_kept_pairs(*shape)
         cost = kernels.d2d_negative_overlap(fixed_means, fixed_covariances, moved, moved_covariances,
-                                            tables.log_weights, NEGLIGIBLE, EXP_FLOOR, *pairs)
+                                            tables.log_weights, SCREEN, EXP_FLOOR, *pairs)
         return cost, partial(kernels.d2d_pose_derivatives, fixed_means, fixed_covariances, moved, rotated,
                              moved_covariances, *pairs)
 

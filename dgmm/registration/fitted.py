@@ -13,36 +13,13 @@ from functools import cached_property
 import numpy as np
 
 from dgmm.errors import InputError
+from dgmm.gaussian import layout, log_density_coefficients
 from dgmm.registration.checks import as_array
 
-_LOG_2PI = np.log(2.0 * np.pi)
 EXP_FLOOR = -700.0
 """Exponents are clipped here before ``np.exp``: numpy's exp is ~20x slower on very negative inputs, and a term of
 ``e^-700 ~ 1e-304`` beside a largest term of 1 changes no sum of fewer than 1e288 terms."""
-_UPPER = (np.array([0, 1, 2, 0, 0, 1]), np.array([0, 1, 2, 1, 2, 2]))
-"""Row and column of the 6 distinct entries of a symmetric 3x3 matrix: xx, yy, zz, xy, xz, yz."""
-FULL_INDEX = np.array([[0, 3, 4], [3, 1, 5], [4, 5, 2]])
-"""Index into those 6 entries of each entry of the full 3x3 matrix."""
-
-
-def quadratic_features(offsets):
-    """Monomials of the offsets up to degree 2: ``(x², y², z², xy, xz, yz, x, y, z, 1)``.
-
-    Parameters
-    ----------
-    offsets : ndarray of shape (n_points, 3)
-
-    Returns
-    -------
-    features : ndarray of shape (n_points, 10)
-        ``features @ FittedMixture.log_density_table`` is every point's log-density under every component.
-    """
-    features = np.empty((len(offsets), 10))
-    rows, cols = _UPPER
-    np.multiply(offsets[:, rows], offsets[:, cols], out=features[:, :6])
-    features[:, 6:9] = offsets
-    features[:, 9] = 1.0
-    return features
+_SHAPE = layout(3)
 
 
 @dataclass(frozen=True)
@@ -93,53 +70,51 @@ class FittedMixture:
         return self.precisions_cholesky @ self.precisions_cholesky.transpose(0, 2, 1)
 
     @cached_property
-    def log_normalisers(self):
-        """``log π_k - 1.5 log 2π + log det U_k``: log-density of component k at its mean plus log weight, (n_components,)."""
-        return (np.log(self.weights) - 1.5 * _LOG_2PI
-                + np.log(np.diagonal(self.precisions_cholesky, axis1=1, axis2=2)).sum(axis=1))
-
-    @cached_property
     def origin(self):
         """Where offsets are measured from (the centroid), so that the expanded quadratics stay well scaled."""
         return self.centroid
 
     @cached_property
-    def log_density_table(self):
-        """Coefficients of ``log π_k N(y | μ_k, Σ_k)`` on :func:`quadratic_features` of ``y - origin``, (10, n_components).
+    def _coefficients(self):
+        """:func:`dgmm.gaussian.log_density_coefficients` of the components about :attr:`origin`, (n_components, 11)."""
+        return log_density_coefficients(self.weights, self.means - self.origin, self.precisions_cholesky)
 
-        ``-½ (d - m)ᵀ P (d - m) = -½ dᵀ P d + dᵀ P m - ½ mᵀ P m`` with ``d = y - origin``, ``m = μ - origin``.
-        """
-        p = self.precisions
-        m = self.means - self.origin
-        pm = np.einsum("kab,kb->ka", p, m)
-        rows, cols = _UPPER
-        quadratic = -p[:, rows, cols] * np.where(rows == cols, 0.5, 1.0)
-        constant = self.log_normalisers - 0.5 * np.einsum("ka,ka->k", m, pm)
-        return np.column_stack([quadratic, pm, constant]).T.copy()
+    @property
+    def log_normalisers(self):
+        """``log π_k - 1.5 log 2π + log det U_k``: log-density of component k at its mean plus log weight,
+        (n_components,)."""
+        return self._coefficients[:, -1]
+
+    @cached_property
+    def log_density_table(self):
+        """Coefficients of ``log π_k N(y | μ_k, Σ_k)`` on :func:`dgmm.gaussian.quadratic_features` of ``y - origin``,
+        (10, n_components): :attr:`_coefficients` with the one's and the log-normaliser's columns added."""
+        coefficients = self._coefficients
+        constant = coefficients[:, -1] + coefficients[:, _SHAPE.one]
+        return np.column_stack([coefficients[:, :_SHAPE.one], constant]).T.copy()
+
+    @cached_property
+    def precision_means(self):
+        """``P_k (μ_k - origin)``, contiguous, (n_components, 3)."""
+        return np.ascontiguousarray(self._coefficients[:, _SHAPE.mean])
 
     @cached_property
     def moment_table(self):
         """``[P_k (9 entries), P_k m_k (3)]`` per component, (n_components, 12): responsibilities times it give
         every point's gradient ``Σ_k r_k P_k (d - m_k)`` and Gauss-Newton weight ``Σ_k r_k P_k``."""
-        p = self.precisions
-        return np.column_stack([p.reshape(-1, 9), np.einsum("kab,kb->ka", p, self.means - self.origin)])
-
-    @cached_property
-    def precision_means(self):
-        """``P_k (μ_k - origin)``, the moment table's last three columns, contiguous, (n_components, 3)."""
-        return np.ascontiguousarray(self.moment_table[:, 9:])
+        return np.column_stack([self.precisions.reshape(-1, 9), self.precision_means])
 
     @cached_property
     def gradient_outer_table(self):
-        """Coefficients of ``g gᵀ`` (6 distinct entries), ``g = P_k (d - m_k)``, on :func:`quadratic_features` of
-        ``d``, shape (n_components, 60): responsibilities times it, contracted with the features, give each
-        point's ``Σ_k r_k g_k g_kᵀ`` (the spread term of the exact Hessian of ``-log p``)."""
-        p = self.precisions
-        pm = np.einsum("kab,kb->ka", p, self.means - self.origin)
-        rows, cols = _UPPER
+        """Coefficients of ``g gᵀ`` (6 distinct entries), ``g = P_k (d - m_k)``, on
+        :func:`dgmm.gaussian.quadratic_features` of ``d``, shape (n_components, 60): responsibilities times it,
+        contracted with the features, give each point's ``Σ_k r_k g_k g_kᵀ`` (the spread term of the exact Hessian
+        of ``-log p``)."""
+        p, pm = self.precisions, self.precision_means
+        rows, cols = _SHAPE.rows, _SHAPE.cols
         p_a, p_b = p[:, rows], p[:, cols]  # rows a and b of P_k for each entry (a, b) of g gᵀ, (n_components, 6, 3)
         outer = p_a[:, :, :, None] * p_b[:, :, None, :]
-        quadratic = (outer + outer.swapaxes(2, 3))[:, :, rows, cols] * np.where(rows == cols, 0.5, 1.0)
+        quadratic = 0.5 * (outer + outer.swapaxes(2, 3))[:, :, rows, cols]  # the features' off-diagonals are doubled
         linear = -(pm[:, cols, None] * p_a + pm[:, rows, None] * p_b)
         constant = pm[:, rows] * pm[:, cols]
         return np.concatenate([quadratic, linear, constant[:, :, None]], axis=2).reshape(len(p), 60)

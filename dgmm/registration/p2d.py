@@ -13,7 +13,8 @@ from functools import partial
 import numpy as np
 
 from dgmm.registration.checks import as_points
-from dgmm.registration.fitted import EXP_FLOOR, FULL_INDEX as _FULL, FittedMixture, quadratic_features
+from dgmm.gaussian import SCREEN, quadratic_features, unpack
+from dgmm.registration.fitted import EXP_FLOOR, FittedMixture
 from dgmm.registration.pose import IDENTITY_PARAMS
 from dgmm.registration.rotations import rotation_and_jacobian
 from dgmm.registration.solvers import (TRANSLATION_UNIT, minimise_bfgs, minimise_gauss_newton, pose_derivatives,
@@ -55,7 +56,7 @@ def _point_hessians(offsets, resp, total, mixture, gradient, weight):
     """Exact Hessian of ``-log p(y_n)``: ``Σ_k r_nk P_k - (Σ_k r_nk g_nk g_nkᵀ - ḡ_n ḡ_nᵀ)``, (n_points, 3, 3)."""
     spread = np.einsum("nef,nf->ne", (resp @ mixture.gradient_outer_table).reshape(-1, 6, 10),
                        quadratic_features(offsets)) / total[:, None]
-    return weight - spread[:, _FULL] + gradient[:, :, None] * gradient[:, None, :]
+    return weight - unpack(spread) + gradient[:, :, None] * gradient[:, None, :]
 
 
 def p2d_cost(params, points, centre, mixture, with_grad):
@@ -113,7 +114,7 @@ def p2d_params_cost(points, centre, mixture, compiled=True):
     def cost(params, with_grad):
         rotation, jacobian = kernels.quaternion_rotation_and_jacobian(params[3:])
         value = kernels.p2d_negative_mean_log_likelihood(local, rotation, centre + params[:3] - mixture.origin, table,
-                                                         *buffers)
+                                                         SCREEN, *buffers)
         if not with_grad:
             return value
         return value, kernels.p2d_params_gradient(mixture.precisions, mixture.precision_means, local, jacobian,
@@ -178,7 +179,7 @@ def _compiled_pose_cost(local, centre, mixture):
     def evaluate(rotation, translation):
         buffers = kernels.p2d_pose_buffers(*buffers_shape)
         cost = kernels.p2d_negative_mean_log_likelihood(local, rotation, centre + translation - mixture.origin,
-                                                        table, *buffers)
+                                                        table, SCREEN, *buffers)
         return cost, partial(kernels.p2d_pose_derivatives, mixture.precisions, mixture.precision_means, *buffers)
 
     return evaluate
@@ -226,3 +227,14 @@ def register_p2d(source, mixture, gradient="analytic", callback=None, options=No
                                      length / TRANSLATION_UNIT, np.eye(3), np.zeros(3), callback, options)
     return minimise_bfgs("p2d", p2d_params_cost(points, centre, mix, compiled), centre, length, IDENTITY_PARAMS,
                          gradient, callback, options)
+
+
+def load_p2d_kernels():
+    """Load P2D's kernels from numba's cache (compiling them where there is none) by registering four points once
+    with each solver: forks of a process that called this, the job server's registration jobs, run them at once."""
+    means = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]])
+    mixture = FittedMixture(np.full(2, 0.5), means, np.repeat(np.eye(3)[None], 2, axis=0),
+                            np.repeat(np.eye(3)[None], 2, axis=0))
+    points = np.array([[0.1, 0.0, 0.0], [0.9, 0.1, 0.0], [0.0, 0.1, 0.1], [1.0, 0.0, 0.1]])
+    for solver in ("bfgs", "gauss-newton"):
+        register_p2d(points, mixture, solver=solver)

@@ -11,6 +11,7 @@ from threadpoolctl import threadpool_limits
 from dgmm.experiments.sweep import job_seed
 from dgmm.odometry import first_frames, frame_seconds, open_sequence, run_odometry
 from dgmm.odometry.metrics import drift_metrics
+from dgmm.odometry.pixels import PIXEL_STEP
 from dgmm.odometry.protocols import PROTOCOLS
 from dgmm.odometry.tum import write_trajectory
 from dgmm.recording import OdometryRecorder
@@ -34,8 +35,8 @@ params = dict(sequence=w.sequence, folder=str(smk.input.sequence), method=method
               warm_iter=p.warm_iter, size=size, n_icp_points=p.icp_points, seed=seed, root_seed=p.seed)
 
 with threadpool_limits(smk.threads), OdometryRecorder(out.mcap, out.rrd, params=params, groundtruth=groundtruth,
-                                                      intrinsics=intrinsics,
-                                                      camera_frame=sequence.camera_frame) as recorder:
+                                                      intrinsics=intrinsics, camera_frame=sequence.camera_frame,
+                                                      pixel_step=PIXEL_STEP) as recorder:
     result = run_odometry(sequence, method, frames, callback=recorder, **options)
     recorder.finish(result.trajectory)
 metrics = drift_metrics(result.trajectory, sequence.groundtruth)  # all None without ground truth

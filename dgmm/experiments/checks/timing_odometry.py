@@ -15,7 +15,8 @@ import numpy as np
 
 from dgmm.experiments.checks.interleaved import interleaved_times
 from dgmm.experiments.sweep import job_seed
-from dgmm.odometry import METHODS, SCHEDULES, groundtruth_at_frames, odometry_runs, parse_intrinsics
+from dgmm.odometry import METHODS, groundtruth_at_frames, odometry_runs, parse_intrinsics
+from dgmm.odometry.schedule_studies import schedule_named
 from dgmm.registration import register_d2d, rotation_distance_deg
 
 VARIANT = "textbook"
@@ -48,9 +49,9 @@ class SweepFrames:
         self.seeds = {method: job_seed(root_seed, f"odometry/{name}/{run}", 0)
                       for run, (method, _) in odometry_runs(methods, [VARIANT]).items()}
         self.intrinsics = parse_intrinsics(intrinsics)
-        self.options = {"n_components": n_components, "warm_iter": warm_iter or None, "schedule": SCHEDULES[schedule],
-                        "variant": VARIANT, "size": pixel_size, "n_icp_points": icp_points, "icp_tol": ICP_TOL,
-                        "intrinsics": self.intrinsics}
+        self.options = {"n_components": n_components, "warm_iter": warm_iter or None,
+                        "schedule": schedule_named(schedule), "variant": VARIANT, "size": pixel_size,
+                        "n_icp_points": icp_points, "icp_tol": ICP_TOL, "intrinsics": self.intrinsics}
         self.previous = dict.fromkeys(methods)
         matched, poses = groundtruth_at_frames(sequence)
         self.truth = dict(zip(matched.tolist(), poses.rotations))

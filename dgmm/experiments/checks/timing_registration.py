@@ -17,12 +17,13 @@ from scipy.optimize import minimize
 from dgmm.experiments.checks.interleaved import interleaved_times
 from dgmm.experiments.sweep import job_seed
 from dgmm.experiments.trials import bounding_diagonal, make_trials
+from dgmm.gaussian import layout
 from dgmm.mixture import GaussianMixture
 from dgmm.primitives import Primitives
 from dgmm.registration import (Registration, euler_to_matrix, kabsch, quaternion_to_matrix, register_cpd,
                                register_p2d, registration_errors, rotation_distance_deg)
 
-_ROWS, _COLS = (0, 1, 2, 0, 0, 1), (0, 1, 2, 1, 2, 2)  # the 6 distinct entries of a symmetric 3x3: xx yy zz xy xz yz
+_PACKED = layout(3).rows, layout(3).cols  # the 6 distinct entries of a symmetric 3x3: xx yy zz xy xz yz
 
 
 def d2d_cost(params, fixed, moving, with_determinant):
@@ -36,7 +37,7 @@ def d2d_cost(params, fixed, moving, with_determinant):
     means = moving.means_ @ rotation.T + params[:3]
     covariances = rotation @ moving.covariances_ @ rotation.T
     xx, yy, zz, xy, xz, yz = (fixed.covariances_[:, None, row, col] + covariances[None, :, row, col]
-                              for row, col in zip(_ROWS, _COLS))  # (K_fixed, K_moving) each
+                              for row, col in zip(*_PACKED))  # (K_fixed, K_moving) each
     x, y, z = (fixed.means_[:, None, axis] - means[None, :, axis] for axis in range(3))
     adj_xx, adj_yy, adj_zz = yy * zz - yz * yz, xx * zz - xz * xz, xx * yy - xy * xy
     adj_xy, adj_xz, adj_yz = xz * yz - xy * zz, xy * yz - yy * xz, xy * xz - xx * yz
