@@ -44,6 +44,10 @@ rule convergence_table:
     log:
         f"{RESULTS}/logs/tables/convergence.log",
     threads: 1
+    resources:
+        mem_mb=500,
+        runtime=5,
+        cpus_per_task=1,
     script:
         "../scripts/concat_tables.py"
 
@@ -210,6 +214,10 @@ rule timing_table:
     log:
         f"{RESULTS}/logs/tables/timing_seconds.log",
     threads: 1
+    resources:
+        mem_mb=500,
+        runtime=5,
+        cpus_per_task=1,
     script:
         "../scripts/concat_tables.py"
 

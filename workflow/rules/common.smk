@@ -1,7 +1,8 @@
 # Config validation, the paths every stage shares and the input functions of the rules (Snakemake's catalogue
 # layout: the stage files hold rules only, the functions they call live here).
-# Every job declares resources (mem_mb, runtime in minutes, cpus_per_task) for cluster schedulers: measured peaks
-# (benchmarks/studies/job_resources.py, docs/user_guide/slurm.md) with about 2x memory and 15x time headroom.
+# Every rule that runs a script declares resources (mem_mb, runtime in minutes, cpus_per_task) for cluster
+# schedulers (target rules run nothing and declare none): measured peaks (benchmarks/studies/job_resources.py,
+# docs/user_guide/slurm.md) with about 2x memory and 15x time headroom.
 import os
 
 from snakemake.utils import validate
