@@ -1,7 +1,8 @@
 # Config validation, the paths every stage shares and the input functions of the rules (Snakemake's catalogue
 # layout: the stage files hold rules only, the functions they call live here).
-# Every job declares resources (mem_mb, runtime in minutes, cpus_per_task) for cluster schedulers: measured peaks
-# (benchmarks/studies/job_resources.py, docs/user_guide/slurm.md) with about 2x memory and 15x time headroom.
+# Every rule that runs a script declares resources (mem_mb, runtime in minutes, cpus_per_task) for cluster
+# schedulers (target rules run nothing and declare none): measured peaks (benchmarks/studies/job_resources.py,
+# docs/user_guide/slurm.md) with about 2x memory and 15x time headroom.
 import os
 
 from snakemake.utils import validate
@@ -23,9 +24,9 @@ FIT = config["fit"]
 REG = config["registration"]
 ODO = config["odometry"]
 ODO_DIR = f"{RESULTS}/odometry"
-CHECKS = config.get("checks", {})
+CHECKS = config["checks"]  # a section present runs its check (none by default)
 SYNTHETIC_SEQUENCE = f"{ODO_DIR}/synthetic/sequence"
-REPORT_DIR = config.get("report", {}).get("dir", "reports")
+REPORT_DIR = config["report"]["dir"]
 PICTURE_BUDGET = 1000  # Fig 5 shows the paper's 1000-primitive decimations and samples
 # Rule priorities: of the jobs ready to run, Snakemake starts those of highest priority first. First the jobs every
 # other waits on (the data stage), then the longest (odometry), then the others, roughly longest first, so that the
@@ -127,7 +128,7 @@ def registration_experiments():
         for model in experiment["models"]:
             trials, methods, protocols = jobs.get((model, experiment["mesh"]), (0, [], []))
             methods = methods + [m for m in experiment["methods"] if m not in methods]
-            protocols = protocols + [p for p in experiment.get("protocols", ["scaled"]) if p not in protocols]
+            protocols = protocols + [p for p in experiment["protocols"] if p not in protocols]
             jobs[model, experiment["mesh"]] = (max(trials, experiment["trials"]), methods, protocols)
     return jobs
 
@@ -267,9 +268,9 @@ CHECK_TABLES = {
 
 def convergence_outputs():
     """Rows of every configured convergence job: one per (input, variant) of ``checks.convergence``."""
-    check = CHECKS.get("convergence")
-    if not check:
+    if "convergence" not in CHECKS:
         return []
+    check = CHECKS["convergence"]
     return [
         f"{RESULTS}/checks/convergence/{check['model']}/{name}/{variant}.csv"
         for name in check["inputs"]

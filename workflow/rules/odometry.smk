@@ -89,6 +89,10 @@ rule odometry_table:
     benchmark:
         f"{RESULTS}/benchmarks/odometry_table.tsv"
     threads: 1
+    resources:
+        mem_mb=500,
+        runtime=5,
+        cpus_per_task=1,
     params:
         missing=ODO_MISSING,
     script:
@@ -106,6 +110,10 @@ rule odometry_figure:
     benchmark:
         f"{RESULTS}/benchmarks/odometry_figure.tsv"
     threads: 1
+    resources:
+        mem_mb=1000,  # measured: 252 MB peak, 0.2 s on tests/config.yaml
+        runtime=5,
+        cpus_per_task=1,
     params:
         sequences=list(ODO_SEQUENCES),
         groundtruth=[source["groundtruth"] for source in ODO_SEQUENCES.values()],
