@@ -9,7 +9,7 @@ from scipy.spatial.transform import Rotation
 from scipy.stats import multivariate_normal
 
 from dgmm.data import load_mesh, load_points
-from dgmm.experiments.checks import identities
+from dgmm.experiments.checks import identities, timing_registration
 from dgmm.experiments.checks.convergence import (convergence_rows, coverage, effective_components,
                                                 iterations_to_converge)
 from dgmm.experiments.checks.identities import CGAL_TETRAHEDRON_MOMENT, identity_rows
@@ -24,6 +24,7 @@ from dgmm.experiments.sweep import build_input, fit_seeds, job_seed
 from dgmm.mixture import GaussianMixture
 from dgmm.odometry import read_sequence
 from dgmm.primitives import Primitives
+from dgmm.registration import register_p2d, rotation_distance_deg
 from dgmm.runtime.tables import read_csv
 
 from conftest import REPO, SHARED_DATA
@@ -248,11 +249,25 @@ def test_registration_timing_rows(res4_mesh, bunny_res4):
     dense = trimesh.sample.sample_surface(bunny_res4, 2000, seed=1)[0]
     rows = cpd_p2d_times((vertices, faces), dense, mixture, repeats=2, root_seed=0, key="test", max_angle_deg=15.0,
                          max_translation=0.05, cpd={"max_iter": 5, "tol": 1e-9}, gradient="analytic")
-    _assert_paired(rows, "cpd vs p2d", ["cpd", "cpd dgmm", "p2d", "p2d numerical"], 2)
+    _assert_paired(rows, "cpd vs p2d", ["cpd", "cpd dgmm", "p2d", "p2d numerical", "p2d authors"], 2)
     by_setting = {(row["repeat"], row["setting"]): row for row in rows}
     for repeat in range(2):  # pycpd and dgmm's copy of it: the same iterations and the same pose
         assert by_setting[repeat, "cpd"]["iterations"] == by_setting[repeat, "cpd dgmm"]["iterations"] == 5
         assert by_setting[repeat, "cpd"]["detail"] == by_setting[repeat, "cpd dgmm"]["detail"]
+
+
+def test_the_authors_p2d_scores_with_scikit_learn_and_lands_where_ours_does(res4_mesh):
+    """registration_test.py's P2D: its cost is scikit-learn's score of the mixture (the same mean log-likelihood as
+    dgmm's), and from a small known motion it lands on ours' pose."""
+    vertices, _, mixture = res4_mesh
+    authors = timing_registration.sklearn_mixture(mixture)
+    assert authors.score(vertices) == pytest.approx(mixture.score(vertices), abs=1e-9)
+    rotation = Rotation.from_euler("xyz", [3, -2, 4], degrees=True).as_matrix()
+    moved = vertices @ rotation.T + [0.002, -0.001, 0.003]
+    theirs = timing_registration.register_p2d_authors(moved, authors)
+    ours = register_p2d(moved, mixture, gradient="numeric", compiled=False)
+    assert rotation_distance_deg(theirs.rotation, ours.rotation) < 0.05
+    np.testing.assert_allclose(theirs.translation, ours.translation, atol=1e-4)
 
 
 ODOMETRY = dict(name=FR1_XYZ.name, root_seed=0, intrinsics="ros", n_components=10, schedule="overlap", warm_iter=0,

@@ -146,6 +146,25 @@ def test_a_timing_interval_across_the_similar_band_gives_no_verdict():
     assert registration.cpd_matches_p2d_runtime(Measurements(timing_seconds=above[:10])).verdict == "pending"
 
 
+def test_the_authors_p2d_cost_is_the_cpd_timing_claims_switch():
+    """CPD 2 s against our numerical P2D's 1 s (not reproduced); the authors' P2D (scikit-learn's score) at 2 s makes
+    the ratio 1: measured, the switch; at 1 s: not the cost's implementation; without it: not measured."""
+    def why(authors_seconds):
+        settings = {"cpd": [2.0] * 6, "p2d numerical": [1.0] * 6, "p2d": [0.1] * 6}
+        if authors_seconds:
+            settings["p2d authors"] = [authors_seconds] * 6
+        claim = registration.cpd_matches_p2d_runtime(Measurements(timing_seconds=timing_rows("cpd vs p2d",
+                                                                                              settings)))
+        assert claim.verdict == "not reproduced"
+        return claim.grades["authors"].why, claim.timings
+
+    measured, timings = why(2.0)
+    assert measured.startswith("Measured: with the authors' P2D") and "the authors' P2D (scikit-learn's score), " \
+        "cpd / p2d authors: median 1" in timings
+    assert "Not the cost's implementation" in why(1.0)[0] and "still outside [0.78, 1.28]" in why(1.0)[0]
+    assert "Not measured: the check's p2d authors setting is missing." in why(None)[0]
+
+
 def test_d2d_primitives_are_graded_by_the_papers_optimiser_with_ours_beside():
     # The paper's BFGS: pixels / points 0.7 ... 0.9 per repeat, all below 1 -> reproduced; ours (Gauss-Newton)
     # 0.9 ... 1.1 would straddle 1, but it only stands beside in the timings.

@@ -7,12 +7,17 @@
 - ``cpd vs p2d`` (§VI-A: "We adjusted pyCPD to run for 150 iterations to approximately match the run-time of our
   P2D GMM registration"): on each of the first Fig 6 trials, pycpd's rigid CPD (``cpd``, the paper's), dgmm's
   operation-for-operation copy of it that the sweep runs (``cpd dgmm``), P2D as the sweep runs it (``p2d``, numba
-  kernels) and P2D with BFGS's forward differences on the numpy cost, the paper's (``p2d numerical``: numpy beside
-  pycpd's numpy), all onto the trial's mixture and target points.
+  kernels), P2D with BFGS's forward differences on the numpy cost (``p2d numerical``: numpy beside pycpd's numpy)
+  and P2D as the authors' ``registration_test.py`` runs it (``p2d authors``: scipy's BFGS with forward differences
+  over ``(q, t)`` from the identity, its cost scikit-learn's ``GaussianMixture.score``), all onto the trial's mixture
+  and target points.
 """
+import time
+
 import numpy as np
 from pycpd import RigidRegistration
 from scipy.optimize import minimize
+from sklearn.mixture import GaussianMixture as SklearnGaussianMixture
 
 from dgmm.experiments.checks.interleaved import interleaved_times
 from dgmm.experiments.sweep import job_seed
@@ -99,9 +104,35 @@ def register_pycpd(source, target, max_iter, tol, w=0.0):
     return Registration(*kabsch(source, moved), int(cpd.iteration), 0.0, float(cpd.q), bool(cpd.diff <= tol), "cpd")
 
 
+def sklearn_mixture(gmm):
+    """scikit-learn's ``GaussianMixture`` holding ``gmm``'s parameters (full covariances), as the authors' modified
+    copy of it scores points."""
+    mixture = SklearnGaussianMixture(len(gmm.weights_), covariance_type="full")
+    mixture.weights_, mixture.means_, mixture.covariances_ = gmm.weights_, gmm.means_, gmm.covariances_
+    mixture.precisions_cholesky_ = gmm.precisions_cholesky_
+    return mixture
+
+
+def register_p2d_authors(source, mixture):
+    """P2D as ``registration_test.py``: ``scipy.optimize.minimize(loss, [1, 0, 0, 0, 0, 0, 0], method="BFGS")`` with
+    forward differences, ``loss(q, t) = -mixture.score(R(q/|q|) (x - x̄) + x̄ - t)`` (``mixture`` a scikit-learn
+    one, :func:`sklearn_mixture`), returned as ``x -> R x + (x̄ - R x̄ - t)``."""
+    start = time.perf_counter()
+    centre = source.mean(axis=0)
+    centred = source - centre
+
+    def loss(x):
+        return -mixture.score(centred @ quaternion_to_matrix(x[:4]).T + centre - x[4:])
+
+    result = minimize(loss, np.array([1.0, 0, 0, 0, 0, 0, 0]), method="BFGS")
+    rotation = quaternion_to_matrix(result.x[:4])
+    return Registration(rotation, centre - rotation @ centre - result.x[4:], int(result.nit),
+                        time.perf_counter() - start, float(result.fun), bool(result.success), "p2d")
+
+
 def cpd_p2d_times(mesh, dense, gmm, *, repeats, root_seed, key, max_angle_deg, max_translation, cpd, gradient):
-    """CPU seconds of CPD (pycpd's and dgmm's) and P2D (the sweep's and forward differences) on the first Fig 6
-    trials.
+    """CPU seconds of CPD (pycpd's and dgmm's) and P2D (the sweep's, forward differences and the authors') on the
+    first Fig 6 trials.
 
     Parameters
     ----------
@@ -131,11 +162,13 @@ def cpd_p2d_times(mesh, dense, gmm, *, repeats, root_seed, key, max_angle_deg, m
     diagonal = bounding_diagonal(vertices)
     setups = make_trials(dense, len(vertices), range(repeats), root_seed=root_seed, key=key, diagonal=diagonal,
                          max_angle_deg=max_angle_deg, max_translation=max_translation)
+    authors = sklearn_mixture(gmm)
     settings = {  # a case: (trial setup, its moved source)
         "cpd": lambda case: register_pycpd(case[1], case[0].target, **cpd),
         "cpd dgmm": lambda case: register_cpd(case[1], case[0].target, **cpd),
         "p2d": lambda case: register_p2d(case[1], gmm, gradient=gradient),
         "p2d numerical": lambda case: register_p2d(case[1], gmm, gradient="numeric", compiled=False),
+        "p2d authors": lambda case: register_p2d_authors(case[1], authors),
     }
 
     def describe(case, setting, result):
