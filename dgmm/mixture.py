@@ -624,19 +624,22 @@ class GaussianMixture(DensityMixin, BaseEstimator):
         ----------
         weights : array-like of shape (n_components,)
         means : array-like of shape (n_components, d)
-        covariances : array-like of shape (n_components, d, d)
-            Symmetric positive definite, else FitError.
+        covariances : array-like
+            In scikit-learn's shape of ``covariance_type`` (a key of ``params``, default "full"): (n_components,
+            d, d), (d, d) tied, (n_components, d) diagonal, (n_components,) spherical; positive definite, else
+            FitError.
         **params
-            Other estimator parameters (``random_state``, ...).
+            Other estimator parameters (``covariance_type``, ``random_state``, ...).
         """
         k = len(weights)
         model = cls(n_components=k, **params)
         model.weights_ = _check_array("weights", weights, (k,))
         d = np.shape(means)[-1] if np.ndim(means) == 2 else 3
         model.means_ = _check_array("means", means, (k, d))
-        model.covariances_ = _check_array("covariances", covariances, (k, d, d))
+        model.covariances_ = _check_array("covariances", covariances, _typed_shape(model.covariance_type, k, d))
         model.n_features_in_ = d
-        model.precisions_cholesky_ = _precisions_cholesky(model.covariances_)
+        full = _full(model.covariances_, model.covariance_type, k, d)
+        model.precisions_cholesky_ = _typed(_precisions_cholesky(full), model.covariance_type)
         return model
 
     def _check_parameters(self, prims):

@@ -4,8 +4,11 @@ A model file is an uncompressed NumPy ``.npz`` archive (read with ``allow_pickle
 
 - ``format_version`` : int scalar, :data:`FORMAT_VERSION`;
 - ``weights`` : ``(n_components,)`` component weights, positive, summing to 1;
-- ``means`` : ``(n_components, 3)``;
-- ``covariances`` : ``(n_components, 3, 3)``, symmetric positive definite;
+- ``means`` : ``(n_components, d)``, any dimension ``d``;
+- ``covariances`` : in scikit-learn's shape of the covariance type: ``(n_components, d, d)`` full (symmetric),
+  ``(d, d)`` tied, ``(n_components, d)`` diagonal, ``(n_components,)`` spherical; positive definite;
+- ``covariance_type`` : str scalar, ``full``, ``tied``, ``diag`` or ``spherical`` (a file without it is full: those
+  written before it was stored);
 - ``params`` : str scalar, a JSON object describing the fit (estimator settings, input, bound, ...).
 
 Files are written to a temporary name beside the target and renamed, so a failed save leaves no partial file.
@@ -19,7 +22,9 @@ import numpy as np
 
 from dgmm.errors import DataError, FitError, InputError
 from dgmm.files import atomic_open
-from dgmm.mixture import GaussianMixture
+from dgmm.mixture import GaussianMixture, _typed_shape
+
+COVARIANCE_TYPES = ("full", "tied", "diag", "spherical")
 
 FORMAT_VERSION = 1
 """Version written by :func:`save_model`; :func:`load_model` reads only this version."""
@@ -36,7 +41,8 @@ def save_model(path, model, params=None):
     path : str or path-like
         Destination; written as given (no ``.npz`` suffix is added). Missing parent folders are created.
     model : GaussianMixture
-        A fitted mixture (any object with ``weights_``, ``means_`` and ``covariances_``).
+        A fitted mixture (any object with ``weights_``, ``means_`` and ``covariances_``, and ``covariance_type``
+        unless full).
     params : dict, optional
         JSON-serialisable description of the fit, stored as the ``params`` JSON string.
 
@@ -57,6 +63,7 @@ def save_model(path, model, params=None):
         "weights": np.asarray(model.weights_, dtype=np.float64),
         "means": np.asarray(model.means_, dtype=np.float64),
         "covariances": np.asarray(model.covariances_, dtype=np.float64),
+        "covariance_type": np.array(getattr(model, "covariance_type", "full")),
         "params": np.array(text),
     }
     with atomic_open(path) as out:
@@ -86,22 +93,30 @@ def _check_version(path, arrays):
 
 
 def _check_arrays(path, arrays):
-    """Weights, means and covariances of ``arrays`` checked for presence, shape and values.
+    """Weights, means, covariances and covariance type of ``arrays`` checked for presence, shape and values.
 
     Returns
     -------
     weights : ndarray of shape (n_components,)
-    means : ndarray of shape (n_components, 3)
-    covariances : ndarray of shape (n_components, 3, 3)
+    means : ndarray of shape (n_components, d)
+    covariances : ndarray in the covariance type's shape (module docstring)
+    covariance_type : str
     """
     missing = [name for name in ("weights", "means", "covariances", "params") if name not in arrays]
     if missing:
         raise DataError(f"{path}: model file lacks {', '.join(missing)}")
     weights, means, covariances = (arrays[name] for name in ("weights", "means", "covariances"))
+    covariance_type = str(arrays.get("covariance_type", "full"))
+    if covariance_type not in COVARIANCE_TYPES:
+        raise DataError(f"{path}: covariance_type must be one of {', '.join(COVARIANCE_TYPES)}, got "
+                        f"{covariance_type!r}")
     if weights.ndim != 1 or len(weights) == 0:
         raise DataError(f"{path}: weights must be a non-empty 1-D array, got shape {weights.shape}")
-    n_components = len(weights)
-    expected = {"weights": (n_components,), "means": (n_components, 3), "covariances": (n_components, 3, 3)}
+    if means.ndim != 2 or means.shape[1] == 0:
+        raise DataError(f"{path}: means must be a 2-D array (n_components, d), got shape {means.shape}")
+    n_components, d = len(weights), means.shape[1]
+    expected = {"weights": (n_components,), "means": (n_components, d),
+                "covariances": _typed_shape(covariance_type, n_components, d)}
     for name, shape in expected.items():
         if arrays[name].shape != shape or not np.issubdtype(arrays[name].dtype, np.floating):
             raise DataError(f"{path}: {name} must be a float array of shape {shape}, got "
@@ -110,9 +125,10 @@ def _check_arrays(path, arrays):
             raise DataError(f"{path}: {name} contains NaN or infinite values")
     if np.any(weights <= 0) or abs(weights.sum() - 1.0) > _WEIGHT_SUM_TOL:
         raise DataError(f"{path}: weights must be positive and sum to 1")
-    if not np.allclose(covariances, np.swapaxes(covariances, 1, 2), rtol=_SYMMETRY_RTOL, atol=0.0):
+    if covariance_type in ("full", "tied") and not np.allclose(covariances, np.swapaxes(covariances, -1, -2),
+                                                               rtol=_SYMMETRY_RTOL, atol=0.0):
         raise DataError(f"{path}: covariances are not symmetric")
-    return weights, means, covariances
+    return weights, means, covariances, covariance_type
 
 
 def _read_params(path, value):
@@ -150,9 +166,9 @@ def load_model(path):
     path = Path(path)
     arrays = _read_arrays(path)
     _check_version(path, arrays)
-    weights, means, covariances = _check_arrays(path, arrays)
+    weights, means, covariances, covariance_type = _check_arrays(path, arrays)
     params = _read_params(path, arrays["params"])
     try:
-        return GaussianMixture.from_parameters(weights, means, covariances), params
+        return GaussianMixture.from_parameters(weights, means, covariances, covariance_type=covariance_type), params
     except FitError:
         raise DataError(f"{path}: covariances are not positive definite") from None

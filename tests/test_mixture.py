@@ -350,6 +350,33 @@ def test_saved_model_loads_back_bit_identical(bunny_res4, tmp_path):
     assert loaded.score_primitives(bunny_res4) == pytest.approx(gmm.score_primitives(bunny_res4), abs=1e-10)
 
 
+@pytest.mark.parametrize("covariance_type", ["full", "tied", "diag", "spherical"])
+@pytest.mark.parametrize("d", [1, 2, 8])
+def test_a_saved_model_of_any_type_and_dimension_scores_as_scikit_learns(tmp_path, covariance_type, d):
+    """A model file keeps the covariance type and dimension: loaded, it scores as scikit-learn's GaussianMixture
+    holding the same parameters (an independent density), and a file claiming another type is one line."""
+    from sklearn.mixture import GaussianMixture as SklearnGaussianMixture
+    from sklearn.mixture._gaussian_mixture import _compute_precision_cholesky
+
+    from dgmm.errors import DataError
+    from dgmm.model_io import load_model, save_model
+
+    points = np.random.default_rng(d).normal(size=(300, d)) * np.arange(1, d + 1)
+    gmm = GaussianMixture(3, covariance_type=covariance_type, random_state=0).fit(points)
+    save_model(tmp_path / "m.npz", gmm)
+    loaded, _ = load_model(tmp_path / "m.npz")
+    reference = SklearnGaussianMixture(3, covariance_type=covariance_type)
+    reference.weights_, reference.means_, reference.covariances_ = gmm.weights_, gmm.means_, gmm.covariances_
+    reference.precisions_cholesky_ = _compute_precision_cholesky(gmm.covariances_, covariance_type)
+    assert loaded.covariance_type == covariance_type
+    np.testing.assert_allclose(loaded.score_samples(points), reference.score_samples(points), rtol=0, atol=1e-10)
+    with np.load(tmp_path / "m.npz") as archive:
+        arrays = dict(archive)
+    np.savez(tmp_path / "bad.npz", **{**arrays, "covariance_type": np.array("banded")})
+    with pytest.raises(DataError, match=r"bad.npz: covariance_type must be one of full, tied, diag, spherical"):
+        load_model(tmp_path / "bad.npz")
+
+
 def test_callback_sees_every_iteration(bunny_res4):
     seen = []
     GaussianMixture(4, max_iter=6, tol=0, random_state=0,
