@@ -36,8 +36,8 @@ def no_early_exit(data):
     authors' own Fig 3 fits stopped early too (their stored mean iterations, authors.csv's n_iter, fall below 25 in
     some cells). So the rule asks that every fit ran the protocol, and the early exits are the evidence."""
     args = ("§IV", "", "Every fit runs the paper's protocol: 25 iterations, ε = 10⁻¹² (an exit only at a fixed point)")
-    rule = (f"protocol, every: one fit of likelihood.csv, at most {PAPER_ITERATIONS} iterations; fewer only where "
-            "the ε tolerance met a fixed point")
+    rule = (f"share, every: one fit of likelihood.csv, at most {PAPER_ITERATIONS} iterations (the protocol; fewer "
+            "only where the ε tolerance met a fixed point)")
     if not data.likelihood:
         return pending(*args, rule, "likelihood.csv", "25 iterations, ε = 10⁻¹²", TEXT)
     grades, lines = {}, []

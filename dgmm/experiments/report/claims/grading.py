@@ -353,8 +353,9 @@ RULE_KINDS = {
         f"*{q.name}* ({q.words}) {q.rule}" for q in QUANTIFIERS)
     + f"; {TELLS_RULE}; for *every* and *plain*, {PARTLY_RULE} (one-sided, {ALPHA:.0%}, over the untied "
     "comparisons)",
-    "equivalence": "a number within a stated margin of a target (the paper's value, zero, rounding), counted as a "
-                   "share",
+    "equivalence": "a number within a stated margin of a target (the paper's value, zero, rounding, a Monte Carlo "
+                   "integral's noise), counted as a share; against a range a word gives (\"about three\"), won with "
+                   "the whole tie band inside, lost wholly outside, tied across",
     "time ratio": f"CPU-time ratios of interleaved repeats; the median's {1 - ALPHA:.0%} interval (order statistics) "
                   f"inside the claim's range: reproduced, outside: not, across its edge: *{TIMING_NOISE}*, no verdict "
                   "(a rerun could flip it); the numbers are only in the timing block",
