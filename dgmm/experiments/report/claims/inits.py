@@ -2,9 +2,10 @@
 k-means − random gaps, and the two contrasts the paper draws from them."""
 import numpy as np
 
-from dgmm.experiments.report.claims.grading import LOSS, OFTEN_WORDS, TIE, WIN, compare, estimate, magnitude, within
-from dgmm.experiments.report.claims.rules import (FIG3_MODEL, Cause, Claim, em, fitted_variant, graded_per_em,
-                                                  graded_share, is_mesh, listing, pending, same, switch_or_not_found)
+from dgmm.experiments.report.claims.grading import LOSS, OFTEN_WORDS, TIE, WIN, compare, estimate, inside, magnitude
+from dgmm.experiments.report.claims.rules import (FIG3_MODEL, SIGNIFICANT_NAT, Cause, Claim, em, fitted_variant,
+                                                  graded_per_em, graded_share, is_mesh, listing, pending, same,
+                                                  switch_or_not_found)
 
 
 def still_climbing(data, variant, k=100):
@@ -68,15 +69,17 @@ def median(values):
 
 def init_contrast(data, args, inputs, quantifier, paper_words):
     """Mesh inputs are (largely) invariant to the start where point inputs are not. Both halves of the paper's
-    sentence are compared: per (mesh input, K), the mesh's kmeans − random within its tie band (invariant in itself),
-    and per (mesh input, point input, K), the mesh's |kmeans − random| below the point input's (the contrast)."""
+    sentence are compared: per (mesh input, K), the mesh's kmeans − random within ±:data:`~.rules.SIGNIFICANT_NAT`
+    (invariant in itself: the two starts' likelihoods "very similar", short of a practical difference), and per (mesh
+    input, point input, K), the mesh's |kmeans − random| below the point input's (the contrast)."""
     mesh, points = tuple(n for n in inputs if is_mesh(n)), tuple(n for n in inputs if not is_mesh(n))
-    rule = (f"share, {quantifier.name}: one (mesh input, K), its kmeans − random within its tie band; and one (mesh "
-            "input, point input, K), the point input's |kmeans − random| − the mesh input's > 0")
+    rule = (f"share, {quantifier.name}: one (mesh input, K), its kmeans − random within ±{SIGNIFICANT_NAT:.2f} nat "
+            "(a practical difference; its whole tie band inside); and one (mesh input, point input, K), the point "
+            "input's |kmeans − random| − the mesh input's > 0")
 
     def comparisons_of(variant):
         gaps = init_gaps(data.estimates, FIG3_MODEL, inputs, variant)
-        invariant = [within(f"{name} K={k} invariant", gap.value, 0.0, gap.band,
+        invariant = [inside(f"{name} K={k} invariant", gap, -SIGNIFICANT_NAT, SIGNIFICANT_NAT,
                             detail=f"{gap:+.3f} ± {gap.band:.3f}") for (name, k), gap in gaps.items() if name in mesh]
         compared = invariant + [
             compare(f"{name} vs {other} K={k}", magnitude(gaps[other, k]) - magnitude(gap),
