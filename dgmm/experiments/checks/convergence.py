@@ -5,8 +5,9 @@ as our proposed method). However, our method often converged in about 1/3 the nu
 here runs ``max_iter`` (config: 100) EM iterations from the seed the fitting sweep gives the same (input, variant,
 K, init, seed), so its state after ``SNAPSHOT`` (25) iterations is the sweep's fit. A row records the evaluation
 log-likelihood at both (``eval_ll_25``, ``eval_ll_final``), how many iterations the bound took to come within each
-of ``CONVERGED_NATS`` of its final value, and two "fuller model" numbers of the 25-iteration mixture (Fig 5): the share of the evaluation points inside at
-least one component's 2σ ellipsoid, and the effective number of components ``exp(entropy of the weights)`` over K.
+of ``CONVERGED_NATS`` of its final value, and two "fuller model" numbers of the 25-iteration mixture (Fig 5): the
+share of the evaluation points inside at least one component's 2σ ellipsoid, and the effective number of components
+``exp(entropy of the weights)`` over K.
 
 The bound is textbook EM's (eq. 8 for triangles, per unit area; the mean log-likelihood for points) under every
 variant, so that "within 0.01 nat" is one scale: the authors' EM optimises its own bound, whose triangle terms are

@@ -99,11 +99,17 @@ def triangle_covariances(triangles):
             - 3 * centroids[:, :, None] * centroids[:, None, :]) / 12
 
 
+def _log_densities(points, weights, means, covariances):
+    """``log λ_i + log N(x; μ_i, Σ_i)`` with scipy's density, shape (n_points, K) (scipy squeezes one point)."""
+    return np.stack([np.log(weight) + np.atleast_1d(multivariate_normal.logpdf(points, mean, covariance))
+                     for weight, mean, covariance in zip(weights, means, covariances)], axis=1)
+
+
 def reference_responsibilities(weights, means, covariances, prim_means, prim_covariances):
     """Textbook E-step responsibilities ``h`` (n_prims, K) with scipy's log-density and the trace term."""
-    log_h = np.stack([np.log(weight) + multivariate_normal.logpdf(prim_means, mean, covariance)
-                      - 0.5 * np.einsum("ij,pji->p", np.linalg.inv(covariance), prim_covariances)
-                      for weight, mean, covariance in zip(weights, means, covariances)], axis=1)
+    traces = np.stack([np.einsum("ij,pji->p", np.linalg.inv(covariance), prim_covariances)
+                       for covariance in covariances], axis=1)
+    log_h = _log_densities(prim_means, weights, means, covariances) - 0.5 * traces
     log_h -= log_h.max(axis=1, keepdims=True)
     h = np.exp(log_h)
     return h / h.sum(axis=1, keepdims=True)
@@ -228,12 +234,6 @@ def points_equal_sklearn(points, n_components, n_iter, reg_covar, rng):
         "covariances": (ours.covariances_, reference.covariances_), "weights": (ours.weights_, reference.weights_)})
 
 
-def _log_densities(points, weights, means, covariances):
-    """``log λ_i + log N(x; μ_i, Σ_i)`` with scipy's density, shape (n_points, K)."""
-    return np.stack([np.log(weight) + multivariate_normal.logpdf(points, mean, covariance)
-                     for weight, mean, covariance in zip(weights, means, covariances)], axis=1)
-
-
 def _monte_carlo_bound(samples, h, sizes, weights, means, covariances):
     """Size-weighted mean over primitives of ``Σ_i h_pi (log λ_i + log N(x; μ_i, Σ_i))`` averaged over each
     primitive's samples (n_prims, m, 3), and its standard error (the samples' spread within each primitive)."""
@@ -250,6 +250,15 @@ def _integral_row(identity, cases, closed, sampled, error, detail):
             "detail": detail, "noise": error}
 
 
+def _bracket(prim_means, weights, means, covariances):
+    """The bound's bracket at each primitive's mean as the paper prints it, ``2 log λ_i − k log 2π − log det Σ_i −
+    (μ_p − μ_i)ᵀ Σ_i⁻¹ (μ_p − μ_i)``, before its extent term (n_prims, K)."""
+    offsets = prim_means[:, None, :] - means[None]
+    quadratic = np.einsum("pki,kij,pkj->pk", offsets, np.linalg.inv(covariances), offsets)
+    return (2 * np.log(weights) - means.shape[1] * np.log(2 * np.pi) - np.linalg.slogdet(covariances)[1]
+            - quadratic)
+
+
 def triangle_bound_monte_carlo(vertices, faces, mixture, samples, rng):
     """Eq. 8 as printed (per unit area) for ``mixture`` and its textbook responsibilities on a mesh's triangles,
     against ``samples`` uniform points a triangle."""
@@ -258,12 +267,9 @@ def triangle_bound_monte_carlo(vertices, faces, mixture, samples, rng):
     weights, means, covariances = mixture.weights_, mixture.means_, mixture.covariances_
     h = reference_responsibilities(weights, means, covariances, centroids, triangle_covariances(triangles))
     precisions = np.linalg.inv(covariances)
-    offsets = centroids[:, None, :] - means[None]  # (n, K, 3)
-    quadratic = np.einsum("nki,kij,nkj->nk", offsets, precisions, offsets)
     vertex_terms = (np.einsum("nvi,kij,nvj->nk", triangles, precisions, triangles)
                     - 3 * np.einsum("ni,kij,nj->nk", centroids, precisions, centroids))
-    bracket = (2 * np.log(weights) - 3 * np.log(2 * np.pi) - np.linalg.slogdet(covariances)[1]
-               - quadratic - vertex_terms / 12)
+    bracket = _bracket(centroids, weights, means, covariances) - vertex_terms / 12
     closed = float(0.5 * np.sum(h * areas[:, None] * bracket) / areas.sum())
     u = rng.random((len(triangles), samples, 2))
     u = np.where(u.sum(axis=2, keepdims=True) > 1, 1 - u, u)  # reflected into the triangle: uniform over it
@@ -283,9 +289,7 @@ def general_bound_monte_carlo(mixture, n_components, samples, rng):
     weights, means, covariances = _start(rng, child.means, n_components,
                                          spread * rng.uniform(0.5, 2.0, n_components)[:, None, None])
     h = reference_responsibilities(weights, means, covariances, child.means, child.covariances)
-    offsets = child.means[:, None, :] - means[None]
-    quadratic = np.einsum("pki,kij,pkj->pk", offsets, np.linalg.inv(covariances), offsets)
-    common = (2 * np.log(weights) - 3 * np.log(2 * np.pi) - np.linalg.slogdet(covariances)[1] - quadratic)
+    common = _bracket(child.means, weights, means, covariances)
 
     def bound(extent):  # eq. 11 with the bracket's last term read as ``extent`` (n_prims, K)
         return float(0.5 * np.sum(h * child.weights[:, None] * (common - extent)) / child.weights.sum())

@@ -139,16 +139,17 @@ def registration_errors(rows, protocol="scaled", variant="textbook"):
         if (row.get("protocol", "scaled") == protocol
                 and row.get("variant", method_variants(method, ["textbook"])[0]) == own):
             groups[row["model"], row["mesh"], method].append(row)
+    groups = {key: sorted(trials, key=lambda row: int(row["trial"])) for key, trials in groups.items()}
     ids = defaultdict(dict)
     for (model, mesh, method), trials in groups.items():
-        ids[model, mesh][method] = sorted(int(row["trial"]) for row in trials)
+        ids[model, mesh][method] = tuple(int(row["trial"]) for row in trials)
     for (model, mesh), by_method in ids.items():
-        if len({tuple(trial_ids) for trial_ids in by_method.values()}) > 1:
+        if len(set(by_method.values())) > 1:
             raise DataError(f"registration.csv: {model} {mesh}: methods {', '.join(sorted(by_method))} ran different "
                             f"trials ({', '.join(f'{m} {len(t)}' for m, t in sorted(by_method.items()))}); their "
                             f"trials cannot be paired")
-    return {key: {name: np.array([float(row[column]) for row in sorted(trials, key=lambda row: int(row["trial"]))])
-                  for name, column in ERRORS.items()} for key, trials in groups.items()}
+    return {key: {name: np.array([float(row[column]) for row in trials]) for name, column in ERRORS.items()}
+            for key, trials in groups.items()}
 
 
 def table1_errors(errors, trials):

@@ -231,7 +231,7 @@ def _fig6_cause(comparisons, elsewhere):
     if ICP_BOOKKEEPING in rest:
         rest.remove(ICP_BOOKKEEPING)
         parts.append(f"ICP's rotation: {ICP_BOOKKEEPING_CAUSE}")
-        found.append(f"icp rotation: {ICP_BOOKKEEPING_CAUSE}")
+        found.append("icp rotation: the authors' reversed composition of ICP steps (the study above)")
     if rest:
         parts.append(f"cause not found for {'the other ' if matched else ''}{len(rest)}"
                      f"{'' if matched else ' missed mean' + 's' * (len(rest) != 1)} (tried both EMs' mixtures; ICP and "
