@@ -15,7 +15,7 @@ from dgmm.experiments.checks.convergence import (convergence_rows, coverage, eff
 from dgmm.experiments.checks.identities import CGAL_TETRAHEDRON_MOMENT, identity_rows
 from dgmm.experiments.checks.interleaved import COLUMNS, interleaved_times, setting_order
 from dgmm.experiments.checks.optimisers import _rotvec_params
-from dgmm.experiments.checks.resampling import component_integrals, split_in_four
+from dgmm.experiments.checks.resampling import component_integrals, merged, pieces_by_triangle, split_in_four
 from dgmm.experiments.checks.timing import TIMING_CHECKS
 from dgmm.experiments.checks.timing_meshes import approximation_times, decimation_times, sampling_times
 from dgmm.experiments.checks.timing_odometry import d2d_primitives_times, odometry_frame_times
@@ -114,6 +114,19 @@ def test_split_in_four_keeps_the_surface_and_the_component_integrals(bunny_res4)
     samples = [multivariate_normal.logpdf(points, m, s) for m, s in zip(mixture.means_, mixture.covariances_)]
     errors = np.array([sample.std() / np.sqrt(len(sample)) for sample in samples])
     assert np.all(np.abs(integrals - [sample.mean() for sample in samples]) <= 4 * errors + 1e-3)
+
+
+def test_pieces_merged_by_their_triangle_are_the_original_triangles(bunny_res4):
+    """The shared-responsibility switch: each triangle's four pieces, merged by their moments, are that triangle as
+    from_mesh computes it (moments of the uniform distribution over it), in the original order."""
+    vertices, faces = np.asarray(bunny_res4.vertices), np.asarray(bunny_res4.faces)
+    pieces, parents = pieces_by_triangle(vertices, faces)
+    assert len(pieces) == 4 * len(faces) and np.array_equal(np.bincount(parents), np.full(len(faces), 4))
+    original, shared = Primitives.from_mesh(vertices, faces), merged(pieces, parents)
+    assert shared.weights == pytest.approx(original.weights, rel=1e-12)
+    assert np.abs(shared.means - original.means).max() <= 1e-12 * np.abs(original.means).max()
+    assert np.abs(shared.covariances - original.covariances).max() <= 1e-9 * np.abs(original.covariances).max()
+    assert not np.allclose(pieces.covariances[::4], original.covariances)  # a piece alone is not its triangle
 
 
 def _relative(row):

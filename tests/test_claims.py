@@ -11,10 +11,11 @@ def verdicts(claim):
     return {variant: grade.verdict for variant, grade in claim.grades.items()}
 
 
-def resampling_rows(eval_gap, component_gap, variant="authors"):
+def resampling_rows(eval_gap, component_gap, variant="authors", shared_gaps=(1e-14, -2e-14)):
     return [{"variant": variant, "seed": str(seed), "eval_ll": "7.5", "eval_ll_split": str(7.5 + eval_gap),
              "eval_gap": str(eval_gap), "bound": "8", "bound_split": "8.1", "bound_gap": "0.1",
-             "component_gap": str(component_gap)} for seed in range(2)]
+             "component_gap": str(component_gap), "eval_ll_shared": str(7.5 + shared),
+             "shared_gap": str(shared)} for seed, shared in enumerate(shared_gaps)]
 
 
 def test_resampling_invariance_is_a_claim_about_the_integrals():
@@ -82,7 +83,12 @@ def test_the_refitted_model_is_graded_on_the_refits_within_their_noise():
     claim = theory.refitted_model_invariant(Measurements(resampling=rows))
     # authors: +0.01 and -0.01, mean 0 inside its band; textbook: +0.1 twice, no spread, outside any band
     assert verdicts(claim) == {"authors": "reproduced", "textbook": "not reproduced"}
-    assert "Not measured" in claim.grades["textbook"].why and "+0.100 ± 0.000" in claim.evidence
+    assert "+0.100 ± 0.000" in claim.evidence
+    # the cause is the switch's: with one responsibility per original triangle the refit lands within its noise
+    assert claim.grades["textbook"].why.startswith("Measured: each piece's own responsibility")
+    still = resampling_rows(0.1, 1e-15, "textbook", shared_gaps=(0.099, 0.101))
+    claim = theory.refitted_model_invariant(Measurements(resampling=authors + still))
+    assert claim.grades["textbook"].why.startswith("Cause not found") and "+0.100" in claim.grades["textbook"].why
     assert theory.refitted_model_invariant(Measurements()).verdict == "pending"
 
 

@@ -292,20 +292,18 @@ def checks_outputs():
 
 
 def report_inputs():
-    """Named inputs of the report: the tables of the configured stages and the bunny files the pictures use."""
+    """Named inputs of the report: every stage's tables (the schema gives `odometry` its defaults when absent), the
+    configured checks' and the bunny files the pictures use."""
     inputs = {
         "likelihood": rules.likelihood_table.output.likelihood,
         "fig2": rules.fig2.output.table,
         "authors": rules.authors_data.output.table,
+        "registration": rules.registration_table.output.errors,
+        "registration_seconds": rules.registration_table.output.seconds,
+        "odometry": f"{RESULTS}/tables/odometry.csv",
+        "fig7": f"{RESULTS}/odometry/fig7.png",
+        "odometry_seconds": f"{RESULTS}/tables/odometry_seconds.csv",
     }
-    inputs["registration"] = rules.registration_table.output.errors
-    inputs["registration_seconds"] = rules.registration_table.output.seconds
-    if "odometry" in config:
-        inputs.update(
-            odometry=f"{RESULTS}/tables/odometry.csv",
-            fig7=f"{RESULTS}/odometry/fig7.png",
-            odometry_seconds=f"{RESULTS}/tables/odometry_seconds.csv",
-        )
     inputs.update(checks_outputs())
     if "bunny" in DATA["models"]:
         inputs.update(

@@ -20,8 +20,8 @@ rule authors_data:
 # Report (issue 6): Table 1, the paper's claims with verdicts and the figures, under report.dir (default reports/):
 #   report.md, claims.md (the evidence ledger), report.html (both, self-contained), table1.csv, table1.md,
 #   authors.csv (the authors' stored values, committed beside the report), figures/{name}.png; only report.md's timing block changes between runs of one commit
-# Inputs follow the configured stages: registration and odometry only when config has their sections; figures whose
-# inputs are not configured are left out and their sections say they are pending.
+# Inputs: every stage's tables, the configured checks' tables; figures whose inputs are not configured are left out
+# and their sections say they are pending.
 rule report:
     input:
         **report_inputs(),
