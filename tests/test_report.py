@@ -416,3 +416,16 @@ def test_report_zip_carries_every_report_output(built):
     expected = {"table1.csv", "fig2.csv"} | {f"{name}.png" for name in drawn if name != "fig7"}
     expected |= {"fig7.png"} if "fig7" in drawn else set()
     assert expected <= names, sorted(expected - names)
+
+
+def test_fig5s_points_gmm_is_the_center_of_mass_gmm_of_the_paper(bunny_res4):
+    """§IV-A contrasts the mesh GMM with "the center-of-mass GMM": Fig 5's points panel is fitted to the triangles'
+    centroids (trimesh's), not to the mesh's vertices."""
+    from dgmm.experiments.report.figures import pictured_mixtures
+    from dgmm.experiments.sweep import job_seed
+    from dgmm.mixture import GaussianMixture
+
+    vertices, faces = np.asarray(bunny_res4.vertices), np.asarray(bunny_res4.faces)
+    pictured = pictured_mixtures({"res4": (vertices, faces)}, seed=0)["points"]
+    centroids = GaussianMixture(100, random_state=job_seed(0, "report/fig5/points", 0)).fit(bunny_res4.triangles_center)
+    assert np.allclose(pictured.means_, centroids.means_, atol=1e-9)
