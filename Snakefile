@@ -30,8 +30,8 @@ include: "workflow/rules/report.smk"
 # Job scripts hand over to one server per run that has imported their libraries (dgmm.runtime.job_server): a job
 # starts in milliseconds instead of seconds, and the P2D kernels' compiled code is loaded once, not by each of the
 # registration jobs (about 0.35 s each). threadpoolctl's first scan of the loaded libraries is made there too: a
-# job's `threadpool_limits` then takes 4.5 ms instead of 15. On a cluster, and run by hand, a script runs in its own
-# process.
+# job's `threadpool_limits` then takes 4.5 ms instead of 15. On a cluster, run by hand, and with `job_server: false`,
+# a script runs in its own process.
 JOB_SCRIPTS = sorted(Path(workflow.basedir, "workflow/scripts").glob("*.py"))
 JOB_SERVER = JobServer(
     [
@@ -44,7 +44,7 @@ JOB_SERVER = JobServer(
 
 
 onstart:
-    if workflow.local_exec:
+    if workflow.local_exec and config["job_server"]:
         JOB_SERVER.start()
 
 
