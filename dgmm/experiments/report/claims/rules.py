@@ -32,9 +32,23 @@ SCALING = "the authors' E-step area scaling"
 """What differs between the two EMs: the authors' E-step multiplies each triangle's Mahalanobis-plus-trace term by its
 area over the smallest area, which sharpens the responsibilities, and their M-step does not weight by area. The sweep
 switches both at once; run apart (:data:`HALVES`), the E-step's scaling is the half that moves the likelihoods."""
+
+
+@dataclass(frozen=True)
+class Study:
+    """A study the sweep does not run, whose numbers a cause quotes: typed by hand, they go stale unless the study is
+    rerun (``command``) on the sweep's tables and ``doc`` and the quote updated with it."""
+
+    doc: str
+    command: str
+
+
+EM_HALVES = Study("docs/studies/em_halves.md", "python benchmarks/studies/em_halves.py --likelihood "
+                  "results/tables/likelihood.csv --data results/data --inputs <two mesh inputs>")
+"""The authors' EM's two halves (E-step scaling, M-step without area weights), each run alone."""
 HALVES = ("its E-step half alone lands nearer the authors' EM in 51 of Fig 3's and Fig 4's 56 mesh cells, all the "
           "difference from random starts and about two thirds from k-means (docs/studies/em_halves.md)")
-"""The measurement of the authors' EM's two halves, each run alone (``benchmarks/studies/em_halves.py``)."""
+"""What :data:`EM_HALVES` measured, quoted by hand (a cause that quotes it names ``EM_HALVES`` as its study)."""
 
 ERROR_NAMES = {"rot": "rotation", "trans": "translation"}
 """The registration errors (registration.csv's rotation and translation columns)."""
@@ -240,10 +254,28 @@ class Cause:
     finding : str
         What was measured behind it (the cells, the numbers, what was tried), a clause for the claim's evidence;
         "" when the sentence says it all.
+    switch : str
+        The switch experiments it reads, each a job of the sweep that changes one thing, named with its table
+        (:data:`EM_VARIANTS`, :data:`LONGER_FITS`, :data:`OWN_CELLS`); "" when it reads none.
+    study : Study or None
+        The study outside the sweep whose hand-typed numbers the sentence quotes; None when every number in it comes
+        from the sweep's tables.
     """
 
     why: str
     finding: str = ""
+    switch: str = ""
+    study: Study = None
+
+
+EM_VARIANTS = ("the EM (config fit.variants): the authors' against textbook on the same inputs and start methods, in "
+               "the claim's own table")
+"""The sweep's EM switch: every mesh input fitted by both EMs (seeds differ by EM)."""
+LONGER_FITS = ("the iterations (the convergence check, config checks.convergence): Fig 3's first seeds run on from "
+               "the paper's 25 to 100, in convergence.csv")
+"""The iteration switch."""
+OWN_CELLS = "the claim's own cells singled out (a start method, a K, an input), in its table"
+"""No switch run for it: the cause is read off the claim's own comparisons."""
 
 
 def explained(evidence, cause):
@@ -296,7 +328,7 @@ def em_switch(finding, variant, grades, compared):
                  f"{_not_won(missed)}.",
                  f"{finding}; {em(other)} on the same data and start method wins {len(flipped)} of the {len(missed)} "
                  f"({grades[other].ours}, {grades[other].verdict}): the authors' EM is the switch, and of its two "
-                 f"halves {HALVES}")
+                 f"halves {HALVES}", EM_VARIANTS, study=EM_HALVES)
 
 
 def by_cause(missed, causes):
@@ -321,7 +353,7 @@ def switch_or_not_found(finding, variant, grades, compared):
     missed = [c for c in compared[variant] if c.outcome != WIN]
     return em_switch(finding, variant, grades, compared) or Cause(
         f"Cause not found: {em(other_em(variant))} on the same data and starts does not win "
-        f"{'it' if len(missed) == 1 else 'them'} either.", finding)
+        f"{'it' if len(missed) == 1 else 'them'} either.", finding, EM_VARIANTS)
 
 
 # -- the likelihood claims' evidence and grades ---------------------------------------------------------------------
