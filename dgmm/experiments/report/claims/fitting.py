@@ -97,9 +97,10 @@ def _early_exit_cause(short, rows):
             "is the switch (which of its halves stops them is not measured)" if scaled else ""))
         if scaled and not points:
             return Cause(f"{capital(SCALING)}: {parts[0]} reach a fixed point before iteration 25, "
-                         f"{again or 'none'} of them under textbook EM.", f"{_TOLERANCE_RULE}: {found[0]}")
+                         f"{again or 'none'} of them under textbook EM.", f"{_TOLERANCE_RULE}: {found[0]}",
+                         EM_VARIANTS)
     return Cause(f"The ε tolerance stops fits at a fixed point before iteration 25: {'; '.join(parts)}.",
-                 f"{_TOLERANCE_RULE}: {'; '.join(found)}")
+                 f"{_TOLERANCE_RULE}: {'; '.join(found)}", EM_VARIANTS if meshes else OWN_CELLS)
 
 
 def _count_by_input(rows):

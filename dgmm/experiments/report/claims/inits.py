@@ -6,8 +6,9 @@ import numpy as np
 
 from dgmm.experiments.report.claims.grading import LOSS, OFTEN_WORDS, TIE, WIN, compare, estimate, inside, magnitude
 from dgmm.experiments.report.claims.record import LIKELIHOOD, PerEmClaim
-from dgmm.experiments.report.claims.rules import (FIG3_MODEL, SIGNIFICANT_NAT, Cause, Claim, em, fitted_variant,
-                                                  graded_share, is_mesh, listing, pending, same, switch_or_not_found)
+from dgmm.experiments.report.claims.rules import (FIG3_MODEL, OWN_CELLS, SIGNIFICANT_NAT, Cause, Claim, em,
+                                                  fitted_variant, graded_share, is_mesh, listing, pending, same,
+                                                  switch_or_not_found)
 
 
 def still_climbing(data, variant, k=100):
@@ -141,5 +142,5 @@ def _prefer_cause(compared, towards_kmeans):
     lost = [c for c in compared if c.outcome != WIN]
     if towards_kmeans and lost and all(c.margin < 0 for c in lost):
         return Cause("K-means-started point fits collapse at high K and end below the random starts.",
-                     f"the k-means starts end below the random ones at {'; '.join(map(str, lost))}")
+                     f"the k-means starts end below the random ones at {'; '.join(map(str, lost))}", OWN_CELLS)
     return Cause("Cause not found: the point fits end as high from either start.")

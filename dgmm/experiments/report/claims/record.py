@@ -9,11 +9,10 @@ The record's functions are module-level functions of the claim's module:
 - ``cause(data, variant, grades, compared) -> Cause`` of a grade not reproduced. It sees both EMs' grades and
   comparisons (``variant -> list``), so that a cause can be the other EM's result on the same data and starts.
 """
-from dataclasses import dataclass
-from functools import partial
+from dataclasses import dataclass, replace
 
-from dgmm.experiments.report.claims.grading import Quantifier
-from dgmm.experiments.report.claims.rules import WORDS, Claim, graded_per_em, same
+from dgmm.experiments.report.claims.grading import PENDING, REPRODUCED, Quantifier, grade_share
+from dgmm.experiments.report.claims.rules import VARIANT_NAMES, VARIANTS, WORDS, Claim, explained, missing, same
 
 LIKELIHOOD = "likelihood.csv"
 CONVERGENCE = "convergence.csv"
@@ -86,9 +85,28 @@ def grade(claim, data):
     """The :class:`~.rules.Claim` of a :class:`PerEmClaim` on ``data``: each EM's comparisons counted under its
     quantifier, each grade not reproduced with its cause's sentence, and its evidence lines with the causes'
     findings."""
-    grades, lines = graded_per_em(partial(claim.comparisons, data), claim.quantifier, partial(claim.cause, data),
-                                  claim.needs, claim.ours)
+    grades, lines = _graded_per_em(claim, data)
     if not claim.mesh:
         grades, lines = same(grades["textbook"]), [line.split(": ", 1)[1] for line in lines[-1:]]
     return Claim(claim.section, claim.figure, claim.title, claim.rule,
                  claim.evidence.format(lines="; ".join(lines), paper=claim.paper), grades, claim.paper, claim.source)
+
+
+def _graded_per_em(claim, data):
+    """``variant -> Grade``, each not reproduced with its cause's sentence, and the ``"<EM>: <evidence>"`` lines of
+    every EM that had fits, each with its cause's finding."""
+    grades, compared, evidence = {}, {}, {}
+    for variant in VARIANTS:
+        compared[variant], evidence[variant] = claim.comparisons(data, variant)
+        if not compared[variant]:
+            grades[variant] = missing(claim.needs)
+            continue
+        grades[variant] = grade_share(compared[variant], claim.quantifier)
+        if claim.ours is not None:
+            grades[variant] = replace(grades[variant], ours=claim.ours(compared[variant]))
+    causes = {variant: claim.cause(data, variant, grades, compared) for variant, grade in grades.items()
+              if grade.verdict not in (REPRODUCED, PENDING)}
+    lines = [f"{VARIANT_NAMES[variant]}: {explained(evidence[variant], causes.get(variant))}" for variant in VARIANTS
+             if compared[variant]]
+    return {variant: replace(grade, why=causes[variant].why) if variant in causes else grade
+            for variant, grade in grades.items()}, lines

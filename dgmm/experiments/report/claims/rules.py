@@ -12,7 +12,7 @@ A grade not reproduced names its cause in one sentence (``Grade.why``, for the s
 it, the cells and what was tried, go to the claim's evidence (:class:`Cause`).
 """
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -380,44 +380,3 @@ def unwon(comparisons):
     lost = [str(c) for c in comparisons if c.outcome == LOSS]
     tied = [c.label for c in comparisons if c.outcome == TIE]
     return "".join(f"; {kind}: {', '.join(items)}" for kind, items in (("lost", lost), ("tied", tied)) if items)
-
-
-def graded_per_em(comparisons_of, quantifier, cause, what, ours=None):
-    """Grades and evidence lines of a share rule graded on each EM's fits.
-
-    Parameters
-    ----------
-    comparisons_of : callable
-        ``comparisons_of(variant) -> (comparisons, evidence)``; no comparisons when that EM's fits are missing.
-    quantifier : Quantifier
-    cause : callable
-        ``cause(variant, grades, compared) -> Cause`` of a grade not reproduced. It sees both EMs' grades and
-        comparisons (``variant -> list``), so that a cause can be the other EM's result on the same data and starts.
-    what : str
-        The fits the claim needs, for a pending grade.
-    ours : callable, optional
-        ``ours(comparisons) -> str``, the grade's short number in place of the share's count (for a claim of one
-        comparison).
-
-    Returns
-    -------
-    grades : dict
-        ``variant -> Grade``, each not reproduced with its cause's sentence.
-    lines : list of str
-        ``"<EM>: <evidence>"`` of every EM that had fits, with its cause's finding.
-    """
-    grades, compared, evidence = {}, {}, {}
-    for variant in VARIANTS:
-        compared[variant], evidence[variant] = comparisons_of(variant)
-        if not compared[variant]:
-            grades[variant] = missing(what)
-            continue
-        grades[variant] = grade_share(compared[variant], quantifier)
-        if ours is not None:
-            grades[variant] = replace(grades[variant], ours=ours(compared[variant]))
-    causes = {variant: cause(variant, grades, compared) for variant, grade in grades.items()
-              if grade.verdict not in (REPRODUCED, PENDING)}
-    lines = [f"{VARIANT_NAMES[variant]}: {explained(evidence[variant], causes.get(variant))}" for variant in VARIANTS
-             if compared[variant]]
-    return {variant: replace(grade, why=causes[variant].why) if variant in causes else grade
-            for variant, grade in grades.items()}, lines
