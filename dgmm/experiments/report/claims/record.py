@@ -11,11 +11,12 @@ The record's functions are module-level functions of the claim's module:
 """
 from dataclasses import dataclass, replace
 
-from dgmm.experiments.report.claims.grading import PENDING, REPRODUCED, Quantifier, grade_share
+from dgmm.experiments.report.claims.grading import INCONCLUSIVE, PENDING, REPRODUCED, Quantifier, grade_share
 from dgmm.experiments.report.claims.rules import VARIANT_NAMES, VARIANTS, WORDS, Claim, explained, missing, same
 
 LIKELIHOOD = "likelihood.csv"
 CONVERGENCE = "convergence.csv"
+REGISTRATION = "registration.csv"
 """The sweep's tables the records read (:attr:`PerEmClaim.table`)."""
 
 
@@ -52,6 +53,10 @@ class PerEmClaim:
     mesh : bool
         Whether mesh fits enter its comparisons; when not (points are fitted by textbook EM in both), it gets one
         grade in both, textbook EM's.
+    cause_when_inconclusive : bool
+        Whether an inconclusive grade's sentence is the cause (as a likelihood claim's is, where the other EM wins
+        what this one ties) or that the data cannot tell (Table 1's claims); its finding goes to the evidence either
+        way.
     """
 
     name: str
@@ -70,6 +75,7 @@ class PerEmClaim:
     evidence: str = "{lines}."
     ours: object = None
     mesh: bool = True
+    cause_when_inconclusive: bool = True
 
     def __post_init__(self):
         """Answer to ``__name__`` and ``__doc__`` as the claims written as functions do (twins and the tests read
@@ -108,5 +114,6 @@ def _graded_per_em(claim, data):
               if grade.verdict not in (REPRODUCED, PENDING)}
     lines = [f"{VARIANT_NAMES[variant]}: {explained(evidence[variant], causes.get(variant))}" for variant in VARIANTS
              if compared[variant]]
-    return {variant: replace(grade, why=causes[variant].why) if variant in causes else grade
+    named = {variant for variant in causes if claim.cause_when_inconclusive or grades[variant].verdict != INCONCLUSIVE}
+    return {variant: replace(grade, why=causes[variant].why) if variant in named else grade
             for variant, grade in grades.items()}, lines

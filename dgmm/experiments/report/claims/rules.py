@@ -274,6 +274,9 @@ EM_VARIANTS = ("the EM (config fit.variants): the authors' against textbook on t
 LONGER_FITS = ("the iterations (the convergence check, config checks.convergence): Fig 3's first seeds run on from "
                "the paper's 25 to 100, in convergence.csv")
 """The iteration switch."""
+COARSE_TO_FINE = ("the registration optimiser: the coarse-to-fine P2D (method mesh-kmeans-c2f) on the same mixture "
+                  "and trials as the paper's P2D, in registration.csv")
+"""The optimiser switch of the registration claims."""
 OWN_CELLS = "the claim's own cells singled out (a start method, a K, an input), in its table"
 """No switch run for it: the cause is read off the claim's own comparisons."""
 
