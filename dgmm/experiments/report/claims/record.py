@@ -46,10 +46,13 @@ class PerEmClaim:
     source : str
         Where ``paper`` comes from (:data:`~.rules.TEXT`, :data:`~.rules.NOTEBOOK`, :data:`~.rules.WORDS`).
     evidence : str
-        Template of the evidence: ``{lines}`` the EMs' evidence lines, ``{paper}`` the paper's value.
+        Template of the evidence: ``{lines}`` the EMs' evidence lines joined by ``separator``, ``{paper}`` the
+        paper's value.
+    separator : str
+        What joins the EMs' evidence lines.
     ours : callable or None
-        ``ours(comparisons) -> str``, the grade's short number in place of the share's count (a claim of one
-        comparison).
+        ``ours(data, variant, comparisons) -> str``, the grade's short number in place of the share's count (a claim
+        of one comparison, or one decided by its worst case).
     mesh : bool
         Whether mesh fits enter its comparisons; when not (points are fitted by textbook EM in both), it gets one
         grade in both, textbook EM's.
@@ -73,6 +76,7 @@ class PerEmClaim:
     paper: str
     source: str = WORDS
     evidence: str = "{lines}."
+    separator: str = "; "
     ours: object = None
     mesh: bool = True
     cause_when_inconclusive: bool = True
@@ -95,7 +99,7 @@ def grade(claim, data):
     if not claim.mesh:
         grades, lines = same(grades["textbook"]), [line.split(": ", 1)[1] for line in lines[-1:]]
     return Claim(claim.section, claim.figure, claim.title, claim.rule,
-                 claim.evidence.format(lines="; ".join(lines), paper=claim.paper), grades, claim.paper, claim.source)
+                 claim.evidence.format(lines=claim.separator.join(lines), paper=claim.paper), grades, claim.paper, claim.source)
 
 
 def _graded_per_em(claim, data):
@@ -109,7 +113,7 @@ def _graded_per_em(claim, data):
             continue
         grades[variant] = grade_share(compared[variant], claim.quantifier)
         if claim.ours is not None:
-            grades[variant] = replace(grades[variant], ours=claim.ours(compared[variant]))
+            grades[variant] = replace(grades[variant], ours=claim.ours(data, variant, compared[variant]))
     causes = {variant: claim.cause(data, variant, grades, compared) for variant, grade in grades.items()
               if grade.verdict not in (REPRODUCED, PENDING)}
     lines = [f"{VARIANT_NAMES[variant]}: {explained(evidence[variant], causes.get(variant))}" for variant in VARIANTS
