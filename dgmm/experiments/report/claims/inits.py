@@ -55,13 +55,14 @@ def versus_rivals(label, ours, rivals, detail):
     if not rivals:
         return None, None
     compared = {name: compare(label, ours - value) for name, value in rivals.items()}
-
-    def deciding(name):
-        c = compared[name]
-        return {LOSS: (0, c.margin + c.band), TIE: (1, c.margin), WIN: (2, c.margin - c.band)}[c.outcome]
-
-    rival = min(compared, key=deciding)
+    rival = min(compared, key=lambda name: _deciding(compared[name]))
     return rival, compare(label, ours - rivals[rival], detail=detail(rival, rivals[rival]))
+
+
+def _deciding(comparison):
+    """Sort key of the rival that decides: lost by most, else tied nearest, else beaten by least."""
+    c = comparison
+    return {LOSS: (0, c.margin + c.band), TIE: (1, c.margin), WIN: (2, c.margin - c.band)}[c.outcome]
 
 
 def median(values):
