@@ -100,7 +100,7 @@ def _early_exit_cause(short, rows):
                          f"{again or 'none'} of them under textbook EM.", f"{_TOLERANCE_RULE}: {found[0]}",
                          EM_VARIANTS)
     return Cause(f"The ε tolerance stops fits at a fixed point before iteration 25: {'; '.join(parts)}.",
-                 f"{_TOLERANCE_RULE}: {'; '.join(found)}", EM_VARIANTS if meshes else OWN_CELLS)
+                 f"{_TOLERANCE_RULE}: {'; '.join(found)}", EM_VARIANTS if meshes and scaled else OWN_CELLS)
 
 
 def _count_by_input(rows):

@@ -37,10 +37,10 @@ class PerEmClaim:
     comparisons, cause : callable
         The module-level functions that make its comparisons and its cause (see the module's docstring).
     table : str
-        The sweep's table it reads (:data:`LIKELIHOOD`, :data:`CONVERGENCE`); its causes name the switch experiments
-        they read (:attr:`~.rules.Cause.switch`).
+        The sweep's table it reads (:data:`LIKELIHOOD`, :data:`CONVERGENCE`, :data:`REGISTRATION`); its causes name
+        the switch experiments they read (:attr:`~.rules.Cause.switch`).
     needs : str
-        The fits it needs, for a pending grade.
+        The fits or trials it needs, for a pending grade.
     paper : str
         The paper's number or words the deciding number stands beside.
     source : str
@@ -98,8 +98,8 @@ def grade(claim, data):
     grades, lines = _graded_per_em(claim, data)
     if not claim.mesh:
         grades, lines = same(grades["textbook"]), [line.split(": ", 1)[1] for line in lines[-1:]]
-    return Claim(claim.section, claim.figure, claim.title, claim.rule,
-                 claim.evidence.format(lines=claim.separator.join(lines), paper=claim.paper), grades, claim.paper, claim.source)
+    evidence = claim.evidence.format(lines=claim.separator.join(lines), paper=claim.paper)
+    return Claim(claim.section, claim.figure, claim.title, claim.rule, evidence, grades, claim.paper, claim.source)
 
 
 def _graded_per_em(claim, data):
