@@ -1,10 +1,12 @@
-"""The paper's claims, one function each, grouped by the paper's sections; each grades its claim with both EMs.
+"""The paper's claims, one entry each, grouped by the paper's sections; each grades its claim with both EMs when
+called on the :class:`Measurements`: a :class:`~.record.PerEmClaim` record (a share rule on each EM's fits, graded
+by :func:`~.record.grade`) or a function.
 
 Modules: :mod:`~.theory` (§II, §III, §V-A, §VII: Fig 2 and the identities), :mod:`~.fitting` (§IV-A, Fig 3,
 Fig 5), :mod:`~.decimation` (§IV-B, §IV-C, Fig 4), :mod:`~.convergence` (§I, §IV-C, §VII), :mod:`~.registration`
 (§VI-A, §VI-B, Fig 6), :mod:`~.table1` (§VI-C, Table 1), :mod:`~.odometry` (§VI-D, Fig 7). The rule kinds and
-verdicts are in :mod:`~.grading`; what a claim holds and the EM policy in :mod:`~.rules`; what the claims read in
-:mod:`~.measurements`.
+verdicts are in :mod:`~.grading`; what a graded claim holds, its causes and the EM policy in :mod:`~.rules`; the
+claim record and its grader in :mod:`~.record`; what the claims read in :mod:`~.measurements`.
 """
 from dataclasses import replace
 

@@ -9,9 +9,10 @@ from collections import defaultdict
 
 from dgmm.experiments.report.claims.grading import EVERY, LOSS, PLAIN, TIE, WIN, compare, estimate, within
 from dgmm.experiments.report.claims.inits import cells, median, still_climbing, versus_rivals
-from dgmm.experiments.report.claims.rules import (FIG3_INPUTS, FIG3_MODEL, TEXT, Cause, Claim, by_cause, em, em_switch,
-                                                  graded_per_em, graded_share, is_mesh, listing, misses, pending, same,
-                                                  switch_or_not_found)
+from dgmm.experiments.report.claims.record import CONVERGENCE, LIKELIHOOD, PerEmClaim
+from dgmm.experiments.report.claims.rules import (FIG3_INPUTS, FIG3_MODEL, LONGER_FITS, TEXT, Cause, Claim, by_cause,
+                                                  em, em_switch, graded_share, is_mesh, listing, misses, pending,
+                                                  same, switch_or_not_found)
 
 CONVERGED = "n_iter_within_0.01"
 """Iterations the bound took to come within 0.01 nat of its value after 100 (convergence.csv)."""
@@ -57,61 +58,72 @@ def points_better_with_100(data):
     flat = [(c, climb) for c, climb in zip(compared, climbs) if c.outcome != WIN]
     cause = Cause("Where the evaluation does not gain, the training bound still climbs: the later iterations fit the "
                   "points, not the surface.",
-                  "where not won, the training bound: " + "; ".join(f"{c}, bound {climb:+.3f}" for c, climb in flat))
+                  "where not won, the training bound: " + "; ".join(f"{c}, bound {climb:+.3f}" for c, climb in flat),
+                  LONGER_FITS)
     grade, evidence = graded_share(compared, PLAIN, cause,
                                    f"gain, mean ± standard error over seeds: {listing(compared)}")
     return Claim(*args, rule, f"{evidence}. Point fits are the same for both EMs.", same(grade), "better")
 
 
-def points_nearly_match_at_100(data):
-    """§IV-C: with 100 iterations "the point-based methods performed better (nearly as good as our proposed
-    method)"."""
-    args = ("§IV-C", "", "At 100 iterations point inputs are nearly as good as the exact mesh")
-    rule = ("share, plain: per (point input, K, init), gap at 100 iterations > 0 and, where the points started behind, "
-            "½ gap at 25 − gap at 100 > 0 (gap: exact − points)")
+def _climbs(data, variant):
+    """``label -> (evaluation gain, training-bound gain)`` of the point fits after iteration 25, per (point input, K,
+    init)."""
+    return {f"{name} K={k} {init} closes half": (_column(points, "eval_ll_final") - _column(points, "eval_ll_25"),
+                                                 _column(points, "bound_final") - _column(points, "bound_25"))
+            for name, k, init, _, points in _pairs(data, variant)}
 
-    climbs = {}  # label -> the points' (evaluation gain, training-bound gain) after iteration 25
 
-    def comparisons_of(variant):
-        compared = []
-        for name, k, init, exact, points in _pairs(data, variant):
-            label = f"{name} K={k} {init}"
-            climbs[f"{label} closes half"] = (_column(points, "eval_ll_final") - _column(points, "eval_ll_25"),
-                                              _column(points, "bound_final") - _column(points, "bound_25"))
-            gap25 = _column(exact, "eval_ll_25") - _column(points, "eval_ll_25")
-            gap100 = _column(exact, "eval_ll_final") - _column(points, "eval_ll_final")
-            compared.append(compare(f"{label} below", gap100, detail=f"exact − points {gap100:+.3f}"))
-            if compare("", gap25).outcome == WIN:
-                closing = _half_minus(exact) - _half_minus(points)
-                compared.append(compare(f"{label} closes half", closing,
-                                        detail=f"{gap25:+.3f} at 25, {gap100:+.3f} at 100"))
-        return compared, listing(compared)
+def _nearly_comparisons(data, variant):
+    """Per (point input, K, init): the exact mesh still ahead at 100, and, where the points started behind, half
+    their gap at 25 closed by 100."""
+    compared = []
+    for name, k, init, exact, points in _pairs(data, variant):
+        label = f"{name} K={k} {init}"
+        gap25 = _column(exact, "eval_ll_25") - _column(points, "eval_ll_25")
+        gap100 = _column(exact, "eval_ll_final") - _column(points, "eval_ll_final")
+        compared.append(compare(f"{label} below", gap100, detail=f"exact − points {gap100:+.3f}"))
+        if compare("", gap25).outcome == WIN:
+            closing = _half_minus(exact) - _half_minus(points)
+            compared.append(compare(f"{label} closes half", closing,
+                                    detail=f"{gap25:+.3f} at 25, {gap100:+.3f} at 100"))
+    return compared, listing(compared)
 
-    def cause(variant, grades, compared):
-        missed = misses(compared[variant])
-        ahead = [c for c in missed if c.label.endswith("below")]
-        open_gap = [c for c in missed if c.label.endswith("closes half")]
-        causes, found = [], []  # causes: (label, count, sentence)
-        if ahead:
-            causes.append(("level with or above the exact mesh, not found", len(ahead),
-                           "Cause not found: the point fits end level with or above the exact mesh."))
-            found.append(f"the point fits end level with or above {em(variant)}'s exact mesh "
-                         f"({'; '.join(map(str, ahead))})")
-        if open_gap:
-            gains = "; ".join(f"{c}; points' evaluation {climbs[c.label][0]:+.3f}, bound {climbs[c.label][1]:+.3f}"
-                              for c in open_gap)
-            causes.append(("the points fit the points after iteration 25", len(open_gap),
-                           "Where the points keep over half their gap, only their training bound climbs after "
-                           "iteration 25: they fit the points, not the surface."))
-            found.append("where the points keep more than half their gap, their training bound still climbs after "
-                         f"iteration 25 but their evaluation does not: they fit the points, not the surface ({gains})")
-        finding = "; ".join(found)
-        return em_switch(finding, variant, grades, compared) or (
-            Cause(by_cause(missed, causes), finding) if open_gap
-            else switch_or_not_found(finding, variant, grades, compared))
 
-    grades, lines = graded_per_em(comparisons_of, PLAIN, cause, WHAT)
-    return Claim(*args, rule, "; ".join(lines) + ".", grades, "nearly as good")
+def _nearly_cause(data, variant, grades, compared):
+    """The EM; else, where the points keep their gap, their training bound climbing while their evaluation does not
+    (they fit the points); the points level with the exact mesh: not found."""
+    missed = misses(compared[variant])
+    ahead = [c for c in missed if c.label.endswith("below")]
+    open_gap = [c for c in missed if c.label.endswith("closes half")]
+    causes, found = [], []  # causes: (label, count, sentence)
+    if ahead:
+        causes.append(("level with or above the exact mesh, not found", len(ahead),
+                       "Cause not found: the point fits end level with or above the exact mesh."))
+        found.append(f"the point fits end level with or above {em(variant)}'s exact mesh "
+                     f"({'; '.join(map(str, ahead))})")
+    if open_gap:
+        climbs = _climbs(data, variant)
+        gains = "; ".join(f"{c}; points' evaluation {climbs[c.label][0]:+.3f}, bound {climbs[c.label][1]:+.3f}"
+                          for c in open_gap)
+        causes.append(("the points fit the points after iteration 25", len(open_gap),
+                       "Where the points keep over half their gap, only their training bound climbs after "
+                       "iteration 25: they fit the points, not the surface."))
+        found.append("where the points keep more than half their gap, their training bound still climbs after "
+                     f"iteration 25 but their evaluation does not: they fit the points, not the surface ({gains})")
+    finding = "; ".join(found)
+    return em_switch(finding, variant, grades, compared) or (
+        Cause(by_cause(missed, causes), finding, LONGER_FITS) if open_gap
+        else switch_or_not_found(finding, variant, grades, compared))
+
+
+points_nearly_match_at_100 = PerEmClaim(
+    "points_nearly_match_at_100", '§IV-C: with 100 iterations "the point-based methods performed better (nearly as '
+    'good as our proposed method)".',
+    "§IV-C", "", "At 100 iterations point inputs are nearly as good as the exact mesh",
+    rule=("share, plain: per (point input, K, init), gap at 100 iterations > 0 and, where the points started behind, "
+          "½ gap at 25 − gap at 100 > 0 (gap: exact − points)"),
+    quantifier=PLAIN, comparisons=_nearly_comparisons, cause=_nearly_cause, table=CONVERGENCE, needs=WHAT,
+    paper="nearly as good")
 
 
 def _half_minus(fits):
@@ -124,90 +136,100 @@ THIRD, ROUNDING = 3.0, 0.5
 """"About 1/3": the point inputs' iterations over the exact mesh's, whose median rounds to 3."""
 
 
-def converges_in_a_third(data):
-    """§IV-C: "our method often converged in about 1/3 the number of iterations, so we picked a lower iteration
-    number for consistency in runtime"."""
-    args = ("§IV-C", "", "The exact mesh converges in about 1/3 the iterations of point inputs")
-    rule = (f"equivalence, every: the median over (point input, K, init, seed) of points / exact iterations to within "
-            f"0.01 nat of the final bound, within {ROUNDING:g} of {THIRD:g}")
-    ratios = {}
-
-    def comparisons_of(variant):
-        ratios[variant] = [int(points[seed][CONVERGED]) / int(exact[seed][CONVERGED])
-                           for _, _, _, exact, points in _pairs(data, variant) for seed in points if seed in exact]
-        if not ratios[variant]:
-            return [], ""
-        typical = median(ratios[variant])
-        near = sum(abs(ratio - THIRD) <= ROUNDING for ratio in ratios[variant])
-        comparison = within("median", typical, THIRD, ROUNDING, detail=f"points / exact {typical:.2f}")
-        return [comparison], (f"{comparison} ({comparison.outcome}) over {len(ratios[variant])} pairs, from "
-                              f"{min(ratios[variant]):.2f} to {max(ratios[variant]):.2f}; {near} pairs within "
-                              f"{ROUNDING:g} of {THIRD:g}")
-
-    def cause(variant, grades, compared):
-        return switch_or_not_found(f"{em(variant)}'s exact mesh needs {1 / median(ratios[variant]):.2f} times the "
-                                   "points' iterations (median)", variant, grades, compared)
-
-    grades, lines = graded_per_em(comparisons_of, EVERY, cause, WHAT, lambda compared: compared[0].detail)
-    return Claim(*args, rule, "; ".join(lines) + ".", grades, "about 1/3", TEXT)
+def _ratios(data, variant):
+    """Points / exact iterations to within 0.01 nat of the final bound, per (point input, K, init, seed)."""
+    return [int(points[seed][CONVERGED]) / int(exact[seed][CONVERGED])
+            for _, _, _, exact, points in _pairs(data, variant) for seed in points if seed in exact]
 
 
-def converges_faster(data):
-    """§I: mesh GMMs "not only converge faster and in more conditions"; §VII: "we are able to build GMM models more
-    quickly"."""
-    args = ("§I", "", "Mesh GMMs converge faster than point GMMs")
-    rule = ("share, plain: one (point input, K, init), points' − exact's mean iterations to within 0.01 nat of the "
-            "final bound > 0")
-
-    def comparisons_of(variant):
-        compared = []
-        for name, k, init, exact, points in _pairs(data, variant):
-            ours, theirs = _column(exact, CONVERGED), _column(points, CONVERGED)
-            compared.append(compare(f"{name} K={k} {init}", theirs - ours, detail=f"exact {ours:.1f}, points "
-                                                                                 f"{theirs:.1f}"))
-        return compared, listing(compared)
-
-    def cause(variant, grades, compared):
-        lost = [c for c in compared[variant] if c.outcome == LOSS]
-        ties = sum(c.outcome == TIE for c in compared[variant])
-        return switch_or_not_found(f"{em(variant)}'s exact mesh takes about as many iterations as the points ({ties} "
-                                   f"of {len(compared[variant])} tied; lost: {'; '.join(map(str, lost))})", variant,
-                                   grades, compared)
-
-    grades, lines = graded_per_em(comparisons_of, PLAIN, cause, WHAT)
-    return Claim(*args, rule, "; ".join(lines) + ".", grades, "faster")
+def _third_comparisons(data, variant):
+    ratios = _ratios(data, variant)
+    if not ratios:
+        return [], ""
+    typical = median(ratios)
+    near = sum(abs(ratio - THIRD) <= ROUNDING for ratio in ratios)
+    comparison = within("median", typical, THIRD, ROUNDING, detail=f"points / exact {typical:.2f}")
+    return [comparison], (f"{comparison} ({comparison.outcome}) over {len(ratios)} pairs, from {min(ratios):.2f} to "
+                          f"{max(ratios):.2f}; {near} pairs within {ROUNDING:g} of {THIRD:g}")
 
 
-def higher_quality(data):
-    """§VII: "By using the covariance structure from the triangles of a mesh, we are able to build GMM models more
-    quickly, robustly and to higher quality".
+def _median_ratio(data, variant, compared):
+    return compared[0].detail
 
-    Graded where the mesh and the points are the same data, Fig 3's res4 as triangles, centroids and vertices; Fig 4's
-    point samples are drawn from the full mesh, another input, and the paper itself finds them often best (§IV-B).
-    """
-    args = ("§VII", "Fig 3", "Mesh GMMs are of higher quality than GMMs of the same mesh's points")
-    rule = ("share, plain: one (init, K), res4's exact mesh above both its centroids and its vertices (each with its "
-            "own band)")
-    points = tuple(name for name in FIG3_INPUTS if not is_mesh(name))
 
-    def comparisons_of(variant):
-        compared = []
-        for (init, k), cell in cells(data.estimates, FIG3_MODEL, FIG3_INPUTS, variant).items():
-            rivals = {name: cell[name] for name in points if name in cell}
-            if EXACT in cell and rivals:
-                compared.append(versus_rivals(f"{init} K={k}", cell[EXACT], rivals,
-                                              lambda rival, value: f"{cell[EXACT]:.3f} vs {rival} {value:.3f}")[1])
-        return compared, listing(compared)
+def _third_cause(data, variant, grades, compared):
+    return switch_or_not_found(f"{em(variant)}'s exact mesh needs {1 / median(_ratios(data, variant)):.2f} times the "
+                               "points' iterations (median)", variant, grades, compared)
 
-    def cause(variant, grades, compared):
-        lost = misses(compared[variant])
-        finding = f"the point inputs match or beat {em(variant)}'s exact mesh ({'; '.join(map(str, lost))})"
-        if all(c.label.startswith("random") for c in lost):
-            finding += f", from random starts still climbing at iteration 25 ({still_climbing(data, variant)})"
-        return switch_or_not_found(finding, variant, grades, compared)
 
-    grades, lines = graded_per_em(comparisons_of, PLAIN, cause, "res4 exact and point fits in likelihood.csv")
-    return Claim(*args, rule, "; ".join(lines) + ".", grades, "higher quality")
+converges_in_a_third = PerEmClaim(
+    "converges_in_a_third", '§IV-C: "our method often converged in about 1/3 the number of iterations, so we picked '
+    'a lower iteration number for consistency in runtime".',
+    "§IV-C", "", "The exact mesh converges in about 1/3 the iterations of point inputs",
+    rule=(f"equivalence, every: the median over (point input, K, init, seed) of points / exact iterations to within "
+          f"0.01 nat of the final bound, within {ROUNDING:g} of {THIRD:g}"),
+    quantifier=EVERY, comparisons=_third_comparisons, cause=_third_cause, table=CONVERGENCE, needs=WHAT,
+    paper="about 1/3", source=TEXT, ours=_median_ratio)
+
+
+def _faster_comparisons(data, variant):
+    compared = []
+    for name, k, init, exact, points in _pairs(data, variant):
+        ours, theirs = _column(exact, CONVERGED), _column(points, CONVERGED)
+        compared.append(compare(f"{name} K={k} {init}", theirs - ours, detail=f"exact {ours:.1f}, points "
+                                                                             f"{theirs:.1f}"))
+    return compared, listing(compared)
+
+
+def _faster_cause(data, variant, grades, compared):
+    lost = [c for c in compared[variant] if c.outcome == LOSS]
+    ties = sum(c.outcome == TIE for c in compared[variant])
+    return switch_or_not_found(f"{em(variant)}'s exact mesh takes about as many iterations as the points ({ties} "
+                               f"of {len(compared[variant])} tied; lost: {'; '.join(map(str, lost))})", variant,
+                               grades, compared)
+
+
+converges_faster = PerEmClaim(
+    "converges_faster", '§I: mesh GMMs "not only converge faster and in more conditions"; §VII: "we are able to '
+    'build GMM models more quickly".', "§I", "", "Mesh GMMs converge faster than point GMMs",
+    rule=("share, plain: one (point input, K, init), points' − exact's mean iterations to within 0.01 nat of the "
+          "final bound > 0"),
+    quantifier=PLAIN, comparisons=_faster_comparisons, cause=_faster_cause, table=CONVERGENCE, needs=WHAT,
+    paper="faster")
+
+
+_POINTS = tuple(name for name in FIG3_INPUTS if not is_mesh(name))
+
+
+def _quality_comparisons(data, variant):
+    """Per (init, K), res4's exact mesh against its centroids and vertices (:func:`~.inits.versus_rivals`)."""
+    compared = []
+    for (init, k), cell in cells(data.estimates, FIG3_MODEL, FIG3_INPUTS, variant).items():
+        rivals = {name: cell[name] for name in _POINTS if name in cell}
+        if EXACT in cell and rivals:
+            compared.append(versus_rivals(f"{init} K={k}", cell[EXACT], rivals,
+                                          lambda rival, value: f"{cell[EXACT]:.3f} vs {rival} {value:.3f}")[1])
+    return compared, listing(compared)
+
+
+def _quality_cause(data, variant, grades, compared):
+    lost = misses(compared[variant])
+    finding = f"the point inputs match or beat {em(variant)}'s exact mesh ({'; '.join(map(str, lost))})"
+    if all(c.label.startswith("random") for c in lost):
+        finding += f", from random starts still climbing at iteration 25 ({still_climbing(data, variant)})"
+    return switch_or_not_found(finding, variant, grades, compared)
+
+
+higher_quality = PerEmClaim(
+    "higher_quality", '§VII: "By using the covariance structure from the triangles of a mesh, we are able to build '
+    'GMM models more quickly, robustly and to higher quality". Graded where the mesh and the points are the same '
+    "data, Fig 3's res4 as triangles, centroids and vertices; Fig 4's point samples are drawn from the full mesh, "
+    "another input, and the paper itself finds them often best (§IV-B).",
+    "§VII", "Fig 3", "Mesh GMMs are of higher quality than GMMs of the same mesh's points",
+    rule=("share, plain: one (init, K), res4's exact mesh above both its centroids and its vertices (each with its "
+          "own band)"),
+    quantifier=PLAIN, comparisons=_quality_comparisons, cause=_quality_cause, table=LIKELIHOOD,
+    needs="res4 exact and point fits in likelihood.csv", paper="higher quality")
 
 
 CLAIMS = (points_better_with_100, points_nearly_match_at_100, converges_in_a_third, converges_faster, higher_quality)

@@ -1,10 +1,13 @@
 """The start-method claims' shared helpers (Fig 3 and Fig 4): per-cell estimates of one model's inputs, the
 k-means − random gaps, and the two contrasts the paper draws from them."""
+from functools import partial
+
 import numpy as np
 
 from dgmm.experiments.report.claims.grading import LOSS, OFTEN_WORDS, TIE, WIN, compare, estimate, inside, magnitude
-from dgmm.experiments.report.claims.rules import (FIG3_MODEL, SIGNIFICANT_NAT, Cause, Claim, em, fitted_variant,
-                                                  graded_per_em, graded_share, is_mesh, listing, pending, same,
+from dgmm.experiments.report.claims.record import LIKELIHOOD, PerEmClaim
+from dgmm.experiments.report.claims.rules import (FIG3_MODEL, OWN_CELLS, SIGNIFICANT_NAT, Cause, Claim, em,
+                                                  fitted_variant, graded_share, is_mesh, listing, pending, same,
                                                   switch_or_not_found)
 
 
@@ -52,13 +55,14 @@ def versus_rivals(label, ours, rivals, detail):
     if not rivals:
         return None, None
     compared = {name: compare(label, ours - value) for name, value in rivals.items()}
-
-    def deciding(name):
-        c = compared[name]
-        return {LOSS: (0, c.margin + c.band), TIE: (1, c.margin), WIN: (2, c.margin - c.band)}[c.outcome]
-
-    rival = min(compared, key=deciding)
+    rival = min(compared, key=lambda name: _deciding(compared[name]))
     return rival, compare(label, ours - rivals[rival], detail=detail(rival, rivals[rival]))
+
+
+def _deciding(comparison):
+    """Sort key of the rival that decides: lost by most, else tied nearest, else beaten by least."""
+    c = comparison
+    return {LOSS: (0, c.margin + c.band), TIE: (1, c.margin), WIN: (2, c.margin - c.band)}[c.outcome]
 
 
 def median(values):
@@ -67,37 +71,50 @@ def median(values):
 
 # -- shared claims: the start-method contrasts of Fig 3 and Fig 4 ---------------------------------------------------
 
-def init_contrast(data, args, inputs, quantifier, paper_words):
-    """Mesh inputs are (largely) invariant to the start where point inputs are not. Both halves of the paper's
-    sentence are compared: per (mesh input, K), the mesh's kmeans − random within ±:data:`~.rules.SIGNIFICANT_NAT`
-    (invariant in itself: the two starts' likelihoods "very similar", short of a practical difference), and per (mesh
-    input, point input, K), the mesh's |kmeans − random| below the point input's (the contrast)."""
-    mesh, points = tuple(n for n in inputs if is_mesh(n)), tuple(n for n in inputs if not is_mesh(n))
-    rule = (f"share, {quantifier.name}: one (mesh input, K), its kmeans − random within ±{SIGNIFICANT_NAT:.2f} nat "
-            "(a practical difference; its whole tie band inside); and one (mesh input, point input, K), the point "
-            "input's |kmeans − random| − the mesh input's > 0")
+def init_contrast(name, words, section, figure, title, inputs, quantifier, paper_words):
+    """The claim that mesh inputs are (largely) invariant to the start where point inputs are not. Both halves of the
+    paper's sentence are compared: per (mesh input, K), the mesh's kmeans − random within
+    ±:data:`~.rules.SIGNIFICANT_NAT` (invariant in itself: the two starts' likelihoods "very similar", short of a
+    practical difference), and per (mesh input, point input, K), the mesh's |kmeans − random| below the point
+    input's (the contrast)."""
+    return PerEmClaim(
+        name, words, section, figure, title,
+        rule=(f"share, {quantifier.name}: one (mesh input, K), its kmeans − random within ±{SIGNIFICANT_NAT:.2f} nat "
+              "(a practical difference; its whole tie band inside); and one (mesh input, point input, K), the point "
+              "input's |kmeans − random| − the mesh input's > 0"),
+        quantifier=quantifier, comparisons=partial(_contrast_comparisons, inputs),
+        cause=partial(_contrast_cause, inputs), table=LIKELIHOOD, needs="mesh and point fits from both starts",
+        paper=paper_words)
 
-    def comparisons_of(variant):
-        gaps = init_gaps(data.estimates, FIG3_MODEL, inputs, variant)
-        invariant = [inside(f"{name} K={k} invariant", gap, -SIGNIFICANT_NAT, SIGNIFICANT_NAT,
-                            detail=f"{gap:+.3f} ± {gap.band:.3f}") for (name, k), gap in gaps.items() if name in mesh]
-        compared = invariant + [
-            compare(f"{name} vs {other} K={k}", magnitude(gaps[other, k]) - magnitude(gap),
-                    detail=f"{gap:+.3f} vs {gaps[other, k]:+.3f}")
-            for (name, k), gap in gaps.items() if name in mesh for other in points if (other, k) in gaps]
-        return compared, (f"median |kmeans − random| meshes {_median_gap(gaps, mesh):.3f}, points "
-                          f"{_median_gap(gaps, points):.3f} nat; kmeans − random, mesh vs point input: "
-                          + listing(compared)) if compared else ""
 
-    def cause(variant, grades, compared):
-        gaps = init_gaps(data.estimates, FIG3_MODEL, inputs, variant)
-        finding = (f"{em(variant)}'s random starts end a median {_median_gap(gaps, mesh):.2f} nat below k-means on "
-                   f"the meshes, as far as on the points ({_median_gap(gaps, points):.2f}), still short of convergence "
-                   f"at iteration 25 ({still_climbing(data, variant)})")
-        return switch_or_not_found(finding, variant, grades, compared)
+def _contrast_comparisons(inputs, data, variant):
+    """:func:`init_contrast`'s comparisons on ``variant``'s fits of ``inputs``, and the median gaps."""
+    mesh, points = _mesh_and_points(inputs)
+    gaps = init_gaps(data.estimates, FIG3_MODEL, inputs, variant)
+    invariant = [inside(f"{name} K={k} invariant", gap, -SIGNIFICANT_NAT, SIGNIFICANT_NAT,
+                        detail=f"{gap:+.3f} ± {gap.band:.3f}") for (name, k), gap in gaps.items() if name in mesh]
+    compared = invariant + [
+        compare(f"{name} vs {other} K={k}", magnitude(gaps[other, k]) - magnitude(gap),
+                detail=f"{gap:+.3f} vs {gaps[other, k]:+.3f}")
+        for (name, k), gap in gaps.items() if name in mesh for other in points if (other, k) in gaps]
+    return compared, (f"median |kmeans − random| meshes {_median_gap(gaps, mesh):.3f}, points "
+                      f"{_median_gap(gaps, points):.3f} nat; kmeans − random, mesh vs point input: "
+                      + listing(compared)) if compared else ""
 
-    grades, lines = graded_per_em(comparisons_of, quantifier, cause, "mesh and point fits from both starts")
-    return Claim(*args, rule, "; ".join(lines) + ".", grades, paper_words)
+
+def _contrast_cause(inputs, data, variant, grades, compared):
+    """The meshes' random starts still climbing at iteration 25, or the EM (:func:`~.rules.switch_or_not_found`)."""
+    mesh, points = _mesh_and_points(inputs)
+    gaps = init_gaps(data.estimates, FIG3_MODEL, inputs, variant)
+    finding = (f"{em(variant)}'s random starts end a median {_median_gap(gaps, mesh):.2f} nat below k-means on "
+               f"the meshes, as far as on the points ({_median_gap(gaps, points):.2f}), still short of convergence "
+               f"at iteration 25 ({still_climbing(data, variant)})")
+    return switch_or_not_found(finding, variant, grades, compared)
+
+
+def _mesh_and_points(inputs):
+    """``inputs`` split into mesh inputs and point inputs."""
+    return tuple(n for n in inputs if is_mesh(n)), tuple(n for n in inputs if not is_mesh(n))
 
 
 def _median_gap(gaps, names):
@@ -126,5 +143,5 @@ def _prefer_cause(compared, towards_kmeans):
     lost = [c for c in compared if c.outcome != WIN]
     if towards_kmeans and lost and all(c.margin < 0 for c in lost):
         return Cause("K-means-started point fits collapse at high K and end below the random starts.",
-                     f"the k-means starts end below the random ones at {'; '.join(map(str, lost))}")
+                     f"the k-means starts end below the random ones at {'; '.join(map(str, lost))}", OWN_CELLS)
     return Cause("Cause not found: the point fits end as high from either start.")

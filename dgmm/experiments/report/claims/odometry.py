@@ -17,8 +17,8 @@ import numpy as np
 
 from dgmm.experiments.report import paper
 from dgmm.experiments.report.claims.grading import PLAIN, Estimate, compare, estimate, grade_share, versus_paper
-from dgmm.experiments.report.claims.rules import (SIMILAR_TIME, TEXT, VARIANT_NAMES, WORDS, Cause, Claim, graded_share,
-                                                  missing, pending, per_variant, same)
+from dgmm.experiments.report.claims.rules import (SIMILAR_TIME, TEXT, VARIANT_NAMES, WORDS, Cause, Claim, Study,
+                                                  graded_share, missing, pending, per_variant, same)
 from dgmm.experiments.report.claims.timings import beside, timing_claim
 from dgmm.odometry.frame_model import UNSIZED_METHODS
 from dgmm.odometry.protocols import OURS
@@ -35,6 +35,14 @@ ATE_SEED_SPREAD = 0.114
 """Standard deviation of one run's ATE RMSE over seeds, as a fraction of the mean: fr1/xyz, gmm-pixels, `overlap`,
 seeds 0-4 of each EM, pooled (textbook 0.0373-0.0439 m, the authors' 0.0322-0.0467; the study's table and command in
 docs/studies/odometry_drift.md, which a test reads back)."""
+SEED_SPREAD_STUDIES = {
+    True: Study("docs/studies/odometry_drift.md", "python benchmarks/studies/odometry_rotation_drift.py --cases "
+                "fr1xyz:10000 --runs gmm-pixels:textbook gmm-pixels:authors --seeds S (S = 0..4)"),
+    False: Study("docs/benchmarks/odometry.md", "its seed table's runs of the authors' protocols (seeds 0-4)")}
+"""Where :data:`ATE_SEED_SPREAD` (True: our protocol) and :data:`AUTHORS_ATE_SEED_SPREAD` were measured: typed by
+hand, read back by a test (tests/test_claims_applications.py)."""
+UNIT_SWITCH = f"the pixels' sizes (odometry protocol {UNIT}: every pixel of size 1, textbook EM), in odometry.csv"
+"""The area switch of the pixel claim."""
 AUTHORS_PROTOCOL = "authors-patch"
 """The authors' protocol the ATE claim is graded on a second time: the paper's Fig 7 draws its pixel run."""
 AUTHORS_ATE_SEED_SPREAD = 0.625
@@ -147,8 +155,9 @@ def _pixel_cause(rows, comparisons, variant, unit_rows=()):
     tied = (f"The paper's {improvement:.1%} is inside a run's seed spread "
             f"({_spread(_ours(rows)):.1%}, fr1/xyz)"
             if _seed_count(rows) < 2 else "The differences are inside the seeds' spread")
+    study = SEED_SPREAD_STUDIES[_ours(rows)] if _seed_count(rows) < 2 else None
     if not _ours(rows):  # one run serves both EMs
-        return Cause(tied + (f"; {', '.join(lost)} lost: cause not found." if lost else "."))
+        return Cause(tied + (f"; {', '.join(lost)} lost: cause not found." if lost else "."), study=study)
     runs = {em_name: _ates(rows, em_name) for em_name in VARIANT_NAMES}
     sequences = [s for s in runs["textbook"]
                  if all({"gmm-pixels", "gmm-points"} <= runs[v].get(s, {}).keys() for v in runs)]
@@ -157,8 +166,8 @@ def _pixel_cause(rows, comparisons, variant, unit_rows=()):
     detail = (f"the two EMs' pixel runs lie {_span(between)} apart, pixels and points {_span(effect)}"
               if sequences else "")
     if lost and variant == "textbook" and not _lost(rows, "authors", lost):
-        return Cause(tied + _area_switch(rows, list(unit_rows), lost), detail)
-    return Cause(tied + (f"; {', '.join(lost)} lost: cause not found." if lost else "."), detail)
+        return Cause(tied + _area_switch(rows, list(unit_rows), lost), detail, UNIT_SWITCH if unit_rows else "", study)
+    return Cause(tied + (f"; {', '.join(lost)} lost: cause not found." if lost else "."), detail, study=study)
 
 
 def _lost(rows, variant, sequences):

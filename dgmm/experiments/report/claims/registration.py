@@ -15,9 +15,11 @@ from dgmm.experiments.report import paper
 from dgmm.experiments.report.claims.grading import (EVERY, LOSS, NOT, PLAIN, REPRODUCED, TIE, WIN, Estimate, Grade,
                                                     TimeRatio, bootstrap, compare, estimate, grade_share, grade_time,
                                                     inside, paired_difference, versus_paper, within)
-from dgmm.experiments.report.claims.rules import (ERROR_NAMES, NOTEBOOK, SIMILAR_TIME, TEXT, VARIANTS, WORDS,
-                                                  WRONG_MINIMUM_DEG, Cause, Claim, conjoined, em, graded_share, missing,
-                                                  pending, per_variant, same, sentence, unwon, wrong_minima)
+from dgmm.experiments.report.claims.record import REGISTRATION, PerEmClaim
+from dgmm.experiments.report.claims.rules import (EM_VARIANTS, ERROR_NAMES, NOTEBOOK, SIMILAR_TIME, TEXT, VARIANTS,
+                                                  WORDS, WRONG_MINIMUM_DEG, Cause, Claim, Study, conjoined, em,
+                                                  graded_share, missing, pending, per_variant, same, sentence, unwon,
+                                                  wrong_minima)
 from dgmm.experiments.report.claims.timings import MIN_REPEATS, beside, timing_claim
 from dgmm.experiments.report.tables import FIG6_MESH
 
@@ -213,22 +215,27 @@ ICP_BOOKKEEPING_CAUSE = ("the authors' script composes its ICP steps' rotations 
                          "R = R @ rotmat); recomputed so on our trials, its mean lands on the paper's (measured in a "
                          "study, not the sweep: benchmarks/studies/icp_authors.py, docs/user_guide/registration.md)")
 """Its finding, with no number of its own: the study's table and command are in the registration guide."""
+ICP_AUTHORS = Study("docs/user_guide/registration.md", "python benchmarks/studies/icp_authors.py")
+"""The study that recomputes the authors' ICP rotation on our trials."""
 
 
-def _fig6_cause(comparisons, elsewhere):
-    """Cause of the Fig 6 means that miss the paper's: those another EM's mixtures match (``elsewhere``: ``variant ->
-    comparisons``), the ICP rotation the study explains, and the rest."""
+def _fig6_cause(data, variant, grades, compared):
+    """Cause of the Fig 6 means that miss the paper's: those another EM's mixtures match, the ICP rotation the study
+    explains (:data:`ICP_AUTHORS`), and the rest."""
+    comparisons = _fig6_comparisons(_errors(data, variant))
+    elsewhere = {v: _fig6_comparisons(_errors(data, v) or {}) for v in VARIANTS if v != variant}
     missed = [key for key, c in comparisons.items() if c.outcome == LOSS]
-    matched = {key: variant for key in missed for variant, others in elsewhere.items()
+    matched = {key: other for key in missed for other, others in elsewhere.items()
                if key in others and others[key].outcome == WIN}
     names = lambda keys: ", ".join(f"{m} {ERROR_NAMES[name]}" for m, name in keys)  # noqa: E731
     parts, found = [], []
-    for variant in dict.fromkeys(matched.values()):
-        keys = [key for key in matched if matched[key] == variant]
-        parts.append(f"{em(variant)}'s mixtures match {len(keys)} of the {len(missed)} missed means")
-        found.append(f"{em(variant)}'s mixtures match the paper's for {names(keys)}")
+    for other in dict.fromkeys(matched.values()):
+        keys = [key for key in matched if matched[key] == other]
+        parts.append(f"{em(other)}'s mixtures match {len(keys)} of the {len(missed)} missed means")
+        found.append(f"{em(other)}'s mixtures match the paper's for {names(keys)}")
     rest = [key for key in missed if key not in matched]
-    if ICP_BOOKKEEPING in rest:
+    explained_by_study = ICP_BOOKKEEPING in rest
+    if explained_by_study:
         rest.remove(ICP_BOOKKEEPING)
         parts.append(f"ICP's rotation: {ICP_BOOKKEEPING_CAUSE}")
         found.append("icp rotation: the authors' reversed composition of ICP steps (the study above)")
@@ -237,55 +244,66 @@ def _fig6_cause(comparisons, elsewhere):
                      f"{'' if matched else ' missed mean' + 's' * (len(rest) != 1)} (tried both EMs' mixtures; ICP and "
                      "CPD fit none)")
         found.append(f"not found for {names(rest)}")
-    return Cause(sentence("; ".join(parts)), "; ".join(found))
+    return Cause(sentence("; ".join(parts)), "; ".join(found), EM_VARIANTS,
+                 ICP_AUTHORS if explained_by_study else None)
 
 
-def fig6_means_match(data):
-    """Fig 6: the per-method mean errors (the authors' notebook numbers; the paper's figure is an image)."""
-    args = ("§VI-A", "Fig 6", "Our mean errors match the paper's per method")
-    rule = ("equivalence, plain: one (method, error), our mean within its tie band (bootstrap) plus the rounding of "
-            "the notebook's")
-    published = "; ".join(f"{m} {r}° / {t}%" for m, (r, t) in paper.FIG6_MEANS.items())
+def _fig6_means(data, variant):
+    """The Fig 6 means against the notebook's and the evidence line (our means, the comparisons not won)."""
+    errors = _errors(data, variant)
+    if not errors:
+        return [], ""
+    comparisons = list(_fig6_comparisons(errors).values())
+    return comparisons, _table(errors, np.mean) + unwon(comparisons)
 
-    def grade(variant):
-        errors = _errors(data, variant)
-        if not errors:
-            return missing(WHAT)
-        comparisons = _fig6_comparisons(errors)
-        elsewhere = {v: _fig6_comparisons(_errors(data, v) or {}) for v in VARIANTS if v != variant}
-        return graded_share(comparisons.values(), PLAIN, _fig6_cause(comparisons, elsewhere),
-                            _table(errors, np.mean) + unwon(comparisons.values()))
 
-    grades, lines = per_variant(grade)
-    return Claim(*args, rule, f"paper: {published}; ours, mean rotation / translation errors, {' — '.join(lines)}.",
-                 grades, "Fig 6's means", NOTEBOOK)
+_FIG6_PUBLISHED = "; ".join(f"{m} {r}° / {t}%" for m, (r, t) in paper.FIG6_MEANS.items())
+fig6_means_match = PerEmClaim(
+    "fig6_means_match", "Fig 6: the per-method mean errors (the authors' notebook numbers; the paper's figure is an "
+    "image).", "§VI-A", "Fig 6", "Our mean errors match the paper's per method",
+    rule=("equivalence, plain: one (method, error), our mean within its tie band (bootstrap) plus the rounding of the "
+          "notebook's"),
+    quantifier=PLAIN, comparisons=_fig6_means, cause=_fig6_cause, table=REGISTRATION, needs=WHAT,
+    paper="Fig 6's means", source=NOTEBOOK,
+    evidence=f"paper: {_FIG6_PUBLISHED}; ours, mean rotation / translation errors, {{lines}}.", separator=" — ",
+    cause_when_inconclusive=False)
 
 
 TRANSLATION_LIMIT = 1.1
 """Fig 6's caption: "better than 1.1% of the model size"."""
 
 
-def all_within_model_size(data):
-    """Fig 6's caption: "all reported methods have position error, on average, better than 1.1% of the model
-    size"."""
-    args = ("§VI-A", "Fig 6", f"Every method's mean translation error is below {TRANSLATION_LIMIT}% of the model size")
-    rule = f"share, every: one method, mean translation error < {TRANSLATION_LIMIT}% (band: bootstrap)"
+def _within_limit(data, variant):
+    """Per method, the limit − its mean translation error."""
+    errors = _errors(data, variant) or {}
+    comparisons = [compare(m, Estimate(TRANSLATION_LIMIT) - bootstrap(np.mean, e["trans"]),
+                           detail=f"{np.mean(e['trans']):.3g}%") for m, e in errors.items()]
+    return comparisons, ", ".join(str(c) for c in comparisons) + unwon(comparisons)
 
-    def grade(variant):
-        errors = _errors(data, variant)
-        if not errors:
-            return missing(WHAT)
-        comparisons = [compare(m, Estimate(TRANSLATION_LIMIT) - bootstrap(np.mean, e["trans"]),
-                               detail=f"{np.mean(e['trans']):.3g}%") for m, e in errors.items()]
-        worst = max(errors, key=lambda m: np.mean(errors[m]["trans"]))
-        outcome = next(c.outcome for c in comparisons if c.label == worst)
-        return (replace(grade_share(comparisons, EVERY, f"{worst}'s mean is above {TRANSLATION_LIMIT}% beyond its "
-                                    "noise."), ours=f"worst {worst} {np.mean(errors[worst]['trans']):.2f}% ({outcome})"),
-                ", ".join(str(c) for c in comparisons) + unwon(comparisons))
 
-    grades, lines = per_variant(grade)
-    return Claim(*args, rule, "mean translation error, " + " — ".join(lines) + ".", grades,
-                 f"all < {TRANSLATION_LIMIT}%", TEXT)
+def _worst_method(data, variant):
+    errors = _errors(data, variant)
+    return max(errors, key=lambda m: np.mean(errors[m]["trans"]))
+
+
+def _worst_translation(data, variant, comparisons):
+    worst = _worst_method(data, variant)
+    outcome = next(c.outcome for c in comparisons if c.label == worst)
+    return f"worst {worst} {np.mean(_errors(data, variant)[worst]['trans']):.2f}% ({outcome})"
+
+
+def _above_limit(data, variant, grades, compared):
+    return Cause(f"{_worst_method(data, variant)}'s mean is above {TRANSLATION_LIMIT}% beyond its noise.")
+
+
+all_within_model_size = PerEmClaim(
+    "all_within_model_size", 'Fig 6\'s caption: "all reported methods have position error, on average, better than '
+    '1.1% of the model size".',
+    "§VI-A", "Fig 6", f"Every method's mean translation error is below {TRANSLATION_LIMIT}% of the model size",
+    rule=f"share, every: one method, mean translation error < {TRANSLATION_LIMIT}% (band: bootstrap)",
+    quantifier=EVERY, comparisons=_within_limit, cause=_above_limit, table=REGISTRATION, needs=WHAT,
+    paper=f"all < {TRANSLATION_LIMIT}%", source=TEXT, evidence="mean translation error, {lines}.", separator=" — ",
+    ours=_worst_translation, cause_when_inconclusive=False)
 
 
 def _wrong_minima_counts(errors):

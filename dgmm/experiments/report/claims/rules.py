@@ -12,7 +12,7 @@ A grade not reproduced names its cause in one sentence (``Grade.why``, for the s
 it, the cells and what was tried, go to the claim's evidence (:class:`Cause`).
 """
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -32,9 +32,23 @@ SCALING = "the authors' E-step area scaling"
 """What differs between the two EMs: the authors' E-step multiplies each triangle's Mahalanobis-plus-trace term by its
 area over the smallest area, which sharpens the responsibilities, and their M-step does not weight by area. The sweep
 switches both at once; run apart (:data:`HALVES`), the E-step's scaling is the half that moves the likelihoods."""
+
+
+@dataclass(frozen=True)
+class Study:
+    """A study the sweep does not run, whose numbers a cause quotes: typed by hand, they go stale unless the study is
+    rerun (``command``) on the sweep's tables and ``doc`` and the quote updated with it."""
+
+    doc: str
+    command: str
+
+
+EM_HALVES = Study("docs/studies/em_halves.md", "python benchmarks/studies/em_halves.py --likelihood "
+                  "results/tables/likelihood.csv --data results/data --inputs <two mesh inputs>")
+"""The authors' EM's two halves (E-step scaling, M-step without area weights), each run alone."""
 HALVES = ("its E-step half alone lands nearer the authors' EM in 51 of Fig 3's and Fig 4's 56 mesh cells, all the "
           "difference from random starts and about two thirds from k-means (docs/studies/em_halves.md)")
-"""The measurement of the authors' EM's two halves, each run alone (``benchmarks/studies/em_halves.py``)."""
+"""What :data:`EM_HALVES` measured, quoted by hand (a cause that quotes it names ``EM_HALVES`` as its study)."""
 
 ERROR_NAMES = {"rot": "rotation", "trans": "translation"}
 """The registration errors (registration.csv's rotation and translation columns)."""
@@ -240,10 +254,31 @@ class Cause:
     finding : str
         What was measured behind it (the cells, the numbers, what was tried), a clause for the claim's evidence;
         "" when the sentence says it all.
+    switch : str
+        The switch experiments it reads, each a job of the sweep that changes one thing, named with its table
+        (:data:`EM_VARIANTS`, :data:`LONGER_FITS`, :data:`OWN_CELLS`); "" when it reads none.
+    study : Study or None
+        The study outside the sweep whose hand-typed numbers the sentence quotes; None when every number in it comes
+        from the sweep's tables.
     """
 
     why: str
     finding: str = ""
+    switch: str = ""
+    study: Study = None
+
+
+EM_VARIANTS = ("the EM (config fit.variants): the authors' against textbook on the same inputs and start methods, in "
+               "the claim's own table")
+"""The sweep's EM switch: every mesh input fitted by both EMs (seeds differ by EM)."""
+LONGER_FITS = ("the iterations (the convergence check, config checks.convergence): Fig 3's first seeds run on from "
+               "the paper's 25 to 100, in convergence.csv")
+"""The iteration switch."""
+COARSE_TO_FINE = ("the registration optimiser: the coarse-to-fine P2D (method mesh-kmeans-c2f) on the same mixture "
+                  "and trials as the paper's P2D, in registration.csv")
+"""The optimiser switch of the registration claims."""
+OWN_CELLS = "the claim's own cells singled out (a start method, a K, an input), in its table"
+"""No switch run for it: the cause is read off the claim's own comparisons."""
 
 
 def explained(evidence, cause):
@@ -296,7 +331,7 @@ def em_switch(finding, variant, grades, compared):
                  f"{_not_won(missed)}.",
                  f"{finding}; {em(other)} on the same data and start method wins {len(flipped)} of the {len(missed)} "
                  f"({grades[other].ours}, {grades[other].verdict}): the authors' EM is the switch, and of its two "
-                 f"halves {HALVES}")
+                 f"halves {HALVES}", EM_VARIANTS, study=EM_HALVES)
 
 
 def by_cause(missed, causes):
@@ -321,7 +356,7 @@ def switch_or_not_found(finding, variant, grades, compared):
     missed = [c for c in compared[variant] if c.outcome != WIN]
     return em_switch(finding, variant, grades, compared) or Cause(
         f"Cause not found: {em(other_em(variant))} on the same data and starts does not win "
-        f"{'it' if len(missed) == 1 else 'them'} either.", finding)
+        f"{'it' if len(missed) == 1 else 'them'} either.", finding, EM_VARIANTS)
 
 
 # -- the likelihood claims' evidence and grades ---------------------------------------------------------------------
@@ -348,44 +383,3 @@ def unwon(comparisons):
     lost = [str(c) for c in comparisons if c.outcome == LOSS]
     tied = [c.label for c in comparisons if c.outcome == TIE]
     return "".join(f"; {kind}: {', '.join(items)}" for kind, items in (("lost", lost), ("tied", tied)) if items)
-
-
-def graded_per_em(comparisons_of, quantifier, cause, what, ours=None):
-    """Grades and evidence lines of a share rule graded on each EM's fits.
-
-    Parameters
-    ----------
-    comparisons_of : callable
-        ``comparisons_of(variant) -> (comparisons, evidence)``; no comparisons when that EM's fits are missing.
-    quantifier : Quantifier
-    cause : callable
-        ``cause(variant, grades, compared) -> Cause`` of a grade not reproduced. It sees both EMs' grades and
-        comparisons (``variant -> list``), so that a cause can be the other EM's result on the same data and starts.
-    what : str
-        The fits the claim needs, for a pending grade.
-    ours : callable, optional
-        ``ours(comparisons) -> str``, the grade's short number in place of the share's count (for a claim of one
-        comparison).
-
-    Returns
-    -------
-    grades : dict
-        ``variant -> Grade``, each not reproduced with its cause's sentence.
-    lines : list of str
-        ``"<EM>: <evidence>"`` of every EM that had fits, with its cause's finding.
-    """
-    grades, compared, evidence = {}, {}, {}
-    for variant in VARIANTS:
-        compared[variant], evidence[variant] = comparisons_of(variant)
-        if not compared[variant]:
-            grades[variant] = missing(what)
-            continue
-        grades[variant] = grade_share(compared[variant], quantifier)
-        if ours is not None:
-            grades[variant] = replace(grades[variant], ours=ours(compared[variant]))
-    causes = {variant: cause(variant, grades, compared) for variant, grade in grades.items()
-              if grade.verdict not in (REPRODUCED, PENDING)}
-    lines = [f"{VARIANT_NAMES[variant]}: {explained(evidence[variant], causes.get(variant))}" for variant in VARIANTS
-             if compared[variant]]
-    return {variant: replace(grade, why=causes[variant].why) if variant in causes else grade
-            for variant, grade in grades.items()}, lines

@@ -1,0 +1,123 @@
+"""A claim as data: a :class:`PerEmClaim` record holds a share rule's whole entry (the paper's words, the rule kind
+and margin, the quantifier, and the plain functions that make its comparisons and its cause), and one grader,
+:func:`grade`, turns a record and the :class:`~.measurements.Measurements` into a :class:`~.rules.Claim`.
+
+The record's functions are module-level functions of the claim's module:
+
+- ``comparisons(data, variant) -> (comparisons, evidence)``: the claim's comparisons on one EM's fits and its
+  evidence line; no comparisons when that EM's fits are missing.
+- ``cause(data, variant, grades, compared) -> Cause`` of a grade not reproduced. It sees both EMs' grades and
+  comparisons (``variant -> list``), so that a cause can be the other EM's result on the same data and starts.
+"""
+from dataclasses import dataclass, replace
+
+from dgmm.experiments.report.claims.grading import INCONCLUSIVE, PENDING, REPRODUCED, Quantifier, grade_share
+from dgmm.experiments.report.claims.rules import VARIANT_NAMES, VARIANTS, WORDS, Claim, explained, missing, same
+
+LIKELIHOOD = "likelihood.csv"
+CONVERGENCE = "convergence.csv"
+REGISTRATION = "registration.csv"
+"""The sweep's tables the records read (:attr:`PerEmClaim.table`)."""
+
+
+@dataclass(frozen=True)
+class PerEmClaim:
+    """One claim graded by a share rule on each EM's fits; calling it on the Measurements grades it (:func:`grade`).
+
+    Attributes
+    ----------
+    name : str
+        Its name in the code, also its ``__name__`` (a twin graded on another view adds a suffix).
+    words : str
+        The paper's words it grades, quoted; also its ``__doc__``.
+    section, figure, title, rule : str
+        As :class:`~.rules.Claim`: ``rule`` states the rule kind, its margin and what one comparison is.
+    quantifier : Quantifier
+        How the comparisons are counted (:data:`~.grading.QUANTIFIERS`).
+    comparisons, cause : callable
+        The module-level functions that make its comparisons and its cause (see the module's docstring).
+    table : str
+        The sweep's table it reads (:data:`LIKELIHOOD`, :data:`CONVERGENCE`, :data:`REGISTRATION`); its causes name
+        the switch experiments they read (:attr:`~.rules.Cause.switch`).
+    needs : str
+        The fits or trials it needs, for a pending grade.
+    paper : str
+        The paper's number or words the deciding number stands beside.
+    source : str
+        Where ``paper`` comes from (:data:`~.rules.TEXT`, :data:`~.rules.NOTEBOOK`, :data:`~.rules.WORDS`).
+    evidence : str
+        Template of the evidence: ``{lines}`` the EMs' evidence lines joined by ``separator``, ``{paper}`` the
+        paper's value.
+    separator : str
+        What joins the EMs' evidence lines.
+    ours : callable or None
+        ``ours(data, variant, comparisons) -> str``, the grade's short number in place of the share's count (a claim
+        of one comparison, or one decided by its worst case).
+    mesh : bool
+        Whether mesh fits enter its comparisons; when not (points are fitted by textbook EM in both), it gets one
+        grade in both, textbook EM's.
+    cause_when_inconclusive : bool
+        Whether an inconclusive grade's sentence is the cause (as a likelihood claim's is, where the other EM wins
+        what this one ties) or that the data cannot tell (Table 1's claims); its finding goes to the evidence either
+        way.
+    """
+
+    name: str
+    words: str
+    section: str
+    figure: str
+    title: str
+    rule: str
+    quantifier: Quantifier
+    comparisons: object
+    cause: object
+    table: str
+    needs: str
+    paper: str
+    source: str = WORDS
+    evidence: str = "{lines}."
+    separator: str = "; "
+    ours: object = None
+    mesh: bool = True
+    cause_when_inconclusive: bool = True
+
+    def __post_init__(self):
+        """Answer to ``__name__`` and ``__doc__`` as the claims written as functions do (twins and the tests read
+        them)."""
+        object.__setattr__(self, "__name__", self.name)
+        object.__setattr__(self, "__doc__", self.words)
+
+    def __call__(self, data):
+        return grade(self, data)
+
+
+def grade(claim, data):
+    """The :class:`~.rules.Claim` of a :class:`PerEmClaim` on ``data``: each EM's comparisons counted under its
+    quantifier, each grade not reproduced with its cause's sentence, and its evidence lines with the causes'
+    findings."""
+    grades, lines = _graded_per_em(claim, data)
+    if not claim.mesh:
+        grades, lines = same(grades["textbook"]), [line.split(": ", 1)[1] for line in lines[-1:]]
+    evidence = claim.evidence.format(lines=claim.separator.join(lines), paper=claim.paper)
+    return Claim(claim.section, claim.figure, claim.title, claim.rule, evidence, grades, claim.paper, claim.source)
+
+
+def _graded_per_em(claim, data):
+    """``variant -> Grade``, each not reproduced with its cause's sentence, and the ``"<EM>: <evidence>"`` lines of
+    every EM that had fits, each with its cause's finding."""
+    grades, compared, evidence = {}, {}, {}
+    for variant in VARIANTS:
+        compared[variant], evidence[variant] = claim.comparisons(data, variant)
+        if not compared[variant]:
+            grades[variant] = missing(claim.needs)
+            continue
+        grades[variant] = grade_share(compared[variant], claim.quantifier)
+        if claim.ours is not None:
+            grades[variant] = replace(grades[variant], ours=claim.ours(data, variant, compared[variant]))
+    causes = {variant: claim.cause(data, variant, grades, compared) for variant, grade in grades.items()
+              if grade.verdict not in (REPRODUCED, PENDING)}
+    lines = [f"{VARIANT_NAMES[variant]}: {explained(evidence[variant], causes.get(variant))}" for variant in VARIANTS
+             if compared[variant]]
+    named = {variant for variant in causes if claim.cause_when_inconclusive or grades[variant].verdict != INCONCLUSIVE}
+    return {variant: replace(grade, why=causes[variant].why) if variant in named else grade
+            for variant, grade in grades.items()}, lines
