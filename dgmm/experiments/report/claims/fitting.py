@@ -114,9 +114,8 @@ def _count_by_input(rows):
 # -- §IV-A, Fig 3 and Fig 5 -----------------------------------------------------------------------------------------
 
 _PUBLISHED = ", ".join(f"K={k} {value:.2f}" for k, value in paper.FIG3_EXACT_KMEANS.items())
-INDEPENDENT_FIT = Study("docs/user_guide/em_variants.md (the cause's sentence says DESIGN.md, which the repository "
-                        "does not have)", "none in the repository: an independent implementation, one seed, scored "
-                        "on the authors' bun_zipper_res4_25k_pds.ply")
+INDEPENDENT_FIT = Study("docs/user_guide/em_variants.md", "none in the repository: an independent implementation, one "
+                        "seed, scored on the authors' bun_zipper_res4_25k_pds.ply")
 """The authors' EM fitted outside the sweep and scored on the authors' own evaluation file (8.65 at K=400)."""
 
 
@@ -139,9 +138,9 @@ def _fig3_cause(data, variant, grades, compared):
     return (variant == "textbook" and em_switch(f"textbook EM ends above the notebook values ({lost})", variant,
                                                 grades, compared)
             or Cause("Cause not found (tried: the seeds' noise, both EMs, the authors' own evaluation file).",
-                     f"not found for {lost}: the margin already holds the seeds' noise, and DESIGN.md records the "
-                     "same 8.65 at K=400 for a fit scored on the authors' own evaluation file (one seed), so the "
-                     "evaluation set is not it", EM_VARIANTS, INDEPENDENT_FIT))
+                     f"not found for {lost}: the margin already holds the seeds' noise, and the EM guide "
+                     "(docs/user_guide/em_variants.md) records the same 8.65 at K=400 for a fit scored on the authors' "
+                     "own evaluation file (one seed), so the evaluation set is not it", EM_VARIANTS, INDEPENDENT_FIT))
 
 
 fig3_values = PerEmClaim(
