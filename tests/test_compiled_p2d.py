@@ -134,16 +134,16 @@ def test_the_compiled_loop_s_callback_sees_the_numpy_path_s_steps(bunny_mixture)
 
 
 def test_the_compiled_loop_reports_a_cost_that_is_not_finite():
-    """Source points 1e200 from the mixture: the cost overflows and the compiled loop raises the numpy path's
-    FitError."""
+    """Source points 1e160 from the mixture (spread over 1e150): their squared offsets overflow, the cost is not
+    finite, and the compiled loop raises the numpy path's FitError."""
     rng = np.random.default_rng(6)
     means = rng.normal(size=(4, 3))
     mixture = FittedMixture.from_fitted("m", _mixture(means, np.repeat(0.1 * np.eye(3)[None], 4, axis=0),
                                                       np.full(4, 0.25)))
-    points = 1e200 + rng.normal(size=(20, 3))
+    points = 1e160 + 1e150 * rng.normal(size=(20, 3))
     for compiled in (True, False):
         with pytest.raises(FitError, match="p2d registration: the cost or its derivatives are not finite at "
-                                               "Gauss-Newton iteration 0"):
+                                           "Gauss-Newton iteration 0"), np.errstate(over="ignore", invalid="ignore"):
             reg.register_p2d(points, mixture, solver="gauss-newton", compiled=compiled)
 
 
