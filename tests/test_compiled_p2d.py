@@ -12,6 +12,7 @@ from sklearn.mixture import GaussianMixture
 
 from dgmm import registration as reg
 from dgmm.compiled import registration as kernels
+from dgmm.errors import FitError
 from dgmm.gaussian import SCREEN, quadratic_features
 from dgmm.registration import p2d
 from dgmm.registration.fitted import FittedMixture
@@ -113,6 +114,39 @@ def test_gauss_newton_poses_equal_the_numpy_path(bunny_mixture):
         assert ours.iterations == theirs.iterations
 
 
+def test_the_compiled_loop_s_callback_sees_the_numpy_path_s_steps(bunny_mixture):
+    """The compiled Gauss-Newton loop reports its kept steps after the solve: the same iterations and poses (to
+    1e-9 rad) as the numpy path's callback saw during its solve, and the last one is the result's pose."""
+    vertices, mixture = bunny_mixture
+    diagonal = float(np.linalg.norm(vertices.max(axis=0) - vertices.min(axis=0)))
+    trial = reg.random_trials(1, np.random.default_rng(5), diagonal, vertices.mean(axis=0))[0]
+    seen = {True: [], False: []}
+    results = {c: reg.register_p2d(trial.apply(vertices), mixture, solver="gauss-newton", compiled=c,
+                                   callback=lambda i, r, c=c: seen[c].append((i, r)))
+               for c in (True, False)}
+    assert [i for i, _ in seen[True]] == [i for i, _ in seen[False]] == list(range(1, results[True].iterations + 1))
+    for (_, ours), (_, theirs) in zip(seen[True], seen[False]):
+        assert not ours.converged
+        assert np.radians(reg.rotation_distance_deg(ours.rotation, theirs.rotation)) < 1e-9
+        assert ours.objective == pytest.approx(theirs.objective, rel=1e-12)
+    np.testing.assert_array_equal(seen[True][-1][1].rotation, results[True].rotation)
+    np.testing.assert_array_equal(seen[True][-1][1].translation, results[True].translation)
+
+
+def test_the_compiled_loop_reports_a_cost_that_is_not_finite():
+    """Source points 1e160 from the mixture (spread over 1e150): their squared offsets overflow, the cost is not
+    finite, and the compiled loop raises the numpy path's FitError."""
+    rng = np.random.default_rng(6)
+    means = rng.normal(size=(4, 3))
+    mixture = FittedMixture.from_fitted("m", _mixture(means, np.repeat(0.1 * np.eye(3)[None], 4, axis=0),
+                                                      np.full(4, 0.25)))
+    points = 1e160 + 1e150 * rng.normal(size=(20, 3))
+    for compiled in (True, False):
+        with pytest.raises(FitError, match="p2d registration: the cost or its derivatives are not finite at "
+                                           "Gauss-Newton iteration 0"), np.errstate(over="ignore", invalid="ignore"):
+            reg.register_p2d(points, mixture, solver="gauss-newton", compiled=compiled)
+
+
 def test_quaternion_rotation_and_jacobian_equal_the_numpy_ones():
     """Quaternions of any length; a zero one gives NaNs (the numpy function raises), which BFGS's cost check turns
     into its error."""
@@ -161,6 +195,7 @@ def test_loading_the_kernels_leaves_nothing_for_a_registration_to_load():
 import numpy as np
 from sklearn.mixture import GaussianMixture
 from dgmm.compiled import registration as kernels
+from dgmm.errors import FitError
 from dgmm.registration.p2d import load_p2d_kernels
 from dgmm.registration import register_p2d, register_p2d_coarse_to_fine
 load_p2d_kernels()
@@ -177,6 +212,6 @@ print([name for name in names if list(getattr(kernels, name).signatures) != load
     run = subprocess.run([sys.executable, "-c", program], capture_output=True, text=True, timeout=300)
     assert run.returncode == 0, run.stderr
     loaded, added = run.stdout.splitlines()
-    assert loaded == str(["p2d_negative_mean_log_likelihood", "p2d_params_gradient", "p2d_pose_derivatives",
-                          "quaternion_rotation_and_jacobian"])
+    assert loaded == str(["p2d_gauss_newton", "p2d_negative_mean_log_likelihood", "p2d_params_gradient",
+                          "p2d_pose_buffers", "quaternion_rotation_and_jacobian"])
     assert added == "[]"

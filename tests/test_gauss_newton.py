@@ -10,7 +10,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from dgmm.errors import FitError
-from dgmm.registration.solvers import minimise_gauss_newton
+from dgmm.registration.solvers import minimise_gauss_newton, next_over_relaxation
 
 
 def skew(v):
@@ -104,12 +104,12 @@ def test_reaches_the_true_pose_from_35_degrees_away():
 
 
 def test_newton_steps_where_the_hessian_is_positive_definite():
-    """The exact Hessian is used where positive definite: with it exact and the Gauss-Newton matrix 100 times too
-    large, the solver still converges in a few Newton steps (quadratic convergence: ≤ 8 iterations). A solver
-    that never takes Newton steps crawls with steps 100 times too short (stretched at most 8x) and is far from
-    converged after 30 iterations (tried)."""
+    """The exact Hessian is used where positive definite: with it exact and the Gauss-Newton matrix 10,000 times too
+    large, the solver still converges in a few Newton steps (quadratic convergence: ≤ 8 iterations). A solver that
+    never takes Newton steps crawls with steps 10,000 times too short (over-relaxed at most twice as far per step)
+    and stops after 14 iterations 6e-7 rad from the pose (tried)."""
     cost = PointCost()
-    result = cost.solve(hessians=lambda g, gauss_newton, exact: (g, 100 * gauss_newton, exact),
+    result = cost.solve(hessians=lambda g, gauss_newton, exact: (g, 1e4 * gauss_newton, exact),
                         options={"max_iter": 30})
     assert result.converged and result.iterations <= 8
     assert cost.error(result)[0] < 1e-8
@@ -142,15 +142,26 @@ def test_a_short_full_newton_step_ends_the_solve_without_derivatives_at_its_pose
 
 
 def test_short_steps_of_a_linearly_converging_solve_do_not_end_it():
-    """Gauss-Newton steps (no exact Hessian) with a matrix 1.5 times too large go two thirds of the way each time
-    (the full step is kept: stretched twice it overshoots as far): convergence is linear, each step twice the
-    distance still to go. The quadratic stopping rule does not apply to them; applied, it stops at a step of 1e-5
-    with 5e-6 still to go, where the tolerance is 1e-8 (tried)."""
+    """Gauss-Newton steps (no exact Hessian) with a matrix ``1.5 D G D``, ``D`` doubling the rotation, wrong by a
+    different factor in each direction so that no multiplier of the step makes it right: convergence is linear
+    (17 iterations). The quadratic stopping rule does not apply to them; applied, it stops 1.5e-5 rad from the
+    pose, where the tolerance is 1e-8 (tried)."""
     cost = PointCost()
-    result = cost.solve(hessians=lambda g, gauss_newton, exact: (g, 1.5 * gauss_newton, None),
+    scaling = np.diag([1.0, 1.0, 1.0, 2.0, 2.0, 2.0])
+    result = cost.solve(hessians=lambda g, gauss_newton, exact: (g, 1.5 * scaling @ gauss_newton @ scaling, None),
                         options={"max_iter": 100})
     angle, translation = cost.error(result)
     assert result.converged and angle < 1e-8 and translation < 1e-8 * cost.radius
+
+
+def test_over_relaxation_is_the_parabola_s_minimum_up_to_twice_the_last():
+    """A kept Gauss-Newton step at 8 times the step: the next multiplier is the minimum of the parabola through the
+    cost (10), its slope along the step (-1 per step) and the new cost, at most twice 8 and at least 1."""
+    assert next_over_relaxation(10.0, -1.0, 8.0, 10.0 - 8.0 + 3.2) == pytest.approx(10.0)  # curvature 0.05
+    assert next_over_relaxation(10.0, -1.0, 8.0, 10.0 - 8.0 + 0.64) == 16.0  # the minimum at 50: twice as far
+    assert next_over_relaxation(10.0, -1.0, 8.0, 10.0 - 8.0) == 16.0  # a straight line: twice as far
+    assert next_over_relaxation(10.0, -1.0, 8.0, 10.0) == pytest.approx(4.0)  # no lower: half way
+    assert next_over_relaxation(10.0, -1.0, 1.0, 10.0) == 1.0  # never below one step
 
 
 def test_damping_grows_until_a_step_lowers_the_cost():

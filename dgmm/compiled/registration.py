@@ -5,6 +5,9 @@
   responsibility ``e^{l_nk - max_k l_nk}`` under a component more than :data:`dgmm.gaussian.SCREEN` nats below its best
   adds less than half a unit in the last place to the point's sum (which is at least 1), so the P2D kernels compute
   every log-density (10 multiply-adds) but the exponential and the moments only of the pairs within the screen.
+  Gauss-Newton's whole loop runs here too (:func:`p2d_gauss_newton`, the steps of
+  :func:`dgmm.registration.solvers.minimise_gauss_newton`): between its 15-20 kernel calls a registration, the solver's
+  Python took a third of the time.
 - D2D (:func:`dgmm.registration.d2d.d2d_pose_cost`, odometry's inner loop): the numpy D2D bounds every pair's term
   before computing the ones that may matter, then works on arrays of a few hundred to a few thousand pairs, and at
   odometry's sizes (K = 100 per frame) its time goes to numpy's per-call overhead. Here every pair's exact term is
@@ -31,14 +34,6 @@ def _skew(a, out):
     out[0, 0], out[0, 1], out[0, 2] = 0.0, -a[2], a[1]
     out[1, 0], out[1, 1], out[1, 2] = a[2], 0.0, -a[0]
     out[2, 0], out[2, 1], out[2, 2] = -a[1], a[0], 0.0
-
-
-@numba.njit(cache=True, nogil=True, error_model="numpy")
-def _symmetric(a00, a01, a02, a11, a12, a22, out):
-    """The symmetric matrix of these entries into ``out`` (3, 3)."""
-    out[0, 0], out[0, 1], out[0, 2] = a00, a01, a02
-    out[1, 0], out[1, 1], out[1, 2] = a01, a11, a12
-    out[2, 0], out[2, 1], out[2, 2] = a02, a12, a22
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
@@ -71,6 +66,7 @@ points vectorises with each component's 10 coefficients held in registers. One b
 took 122, 61, 60 and 62 µs with blocks of 8, 16, 32 and 64 points, and 101 µs point by point over the components."""
 
 
+@numba.njit(cache=True, nogil=True, error_model="numpy")
 def p2d_pose_buffers(n_points, n_components):
     """Buffers for :func:`p2d_negative_mean_log_likelihood` to leave a pose's moved points and screened pairs in,
     for :func:`p2d_pose_derivatives` at the same pose: ``(rotated (n_points, 3), offsets (n_points, 3), starts
@@ -165,6 +161,52 @@ def _pair_gradient(precisions, precision_means, k, d0, d1, d2):
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
+def _add_pose_blocks(a00, a01, a02, a11, a12, a22, p, out):
+    """``out += `` the distinct entries of ``Jᵀ A J`` (6, 6) for a symmetric ``A``, ``J = [I, -[p]x]``: ``A``'s
+    upper triangle (6), ``-A [p]x`` (9, row-major) and ``-[p]x A [p]x``'s upper triangle (6), into ``out`` (21,)
+    (:func:`_pose_matrix` unpacks them). Where :func:`_add_pose_matrix` updates 36 entries from a 3x3 product, this
+    takes 30 products into 21 sums: the Gauss-Newton derivatives' per-point cost."""
+    p0, p1, p2 = p[0], p[1], p[2]
+    # B = A [p]x, column by column: [p]x's columns are (0, p2, -p1), (-p2, 0, p0), (p1, -p0, 0)
+    b00, b01, b02 = a01 * p2 - a02 * p1, a02 * p0 - a00 * p2, a00 * p1 - a01 * p0
+    b10, b11, b12 = a11 * p2 - a12 * p1, a12 * p0 - a01 * p2, a01 * p1 - a11 * p0
+    b20, b21, b22 = a12 * p2 - a22 * p1, a22 * p0 - a02 * p2, a02 * p1 - a12 * p0
+    out[0] += a00
+    out[1] += a01
+    out[2] += a02
+    out[3] += a11
+    out[4] += a12
+    out[5] += a22
+    out[6] -= b00
+    out[7] -= b01
+    out[8] -= b02
+    out[9] -= b10
+    out[10] -= b11
+    out[11] -= b12
+    out[12] -= b20
+    out[13] -= b21
+    out[14] -= b22
+    # -[p]x B, by [p]x's rows (0, -p2, p1), (p2, 0, -p0), (-p1, p0, 0)
+    out[15] -= p1 * b20 - p2 * b10
+    out[16] -= p1 * b21 - p2 * b11
+    out[17] -= p1 * b22 - p2 * b12
+    out[18] -= p2 * b01 - p0 * b21
+    out[19] -= p2 * b02 - p0 * b22
+    out[20] -= p0 * b12 - p1 * b02
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _pose_matrix(blocks, scale, out):
+    """``out`` (6, 6) ``= scale`` times the symmetric matrix of :func:`_add_pose_blocks`' 21 sums."""
+    upper = ((0, 1, 2), (1, 3, 4), (2, 4, 5))
+    for a in range(3):
+        for b in range(3):
+            out[a, b] = scale * blocks[upper[a][b]]
+            out[a, 3 + b] = out[3 + b, a] = scale * blocks[6 + 3 * a + b]
+            out[3 + a, 3 + b] = scale * blocks[15 + upper[a][b]]
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
 def p2d_pose_derivatives(precisions, precision_means, rotated, offsets, starts, components, terms, sums):
     """Gradient, Gauss-Newton matrix and exact Hessian over ``(δ, ω)`` of the cost at the pose of ``offsets``
     (what :func:`~dgmm.registration.p2d.p2d_pose_cost`'s ``derivatives()`` returns), from the screened pairs
@@ -191,11 +233,8 @@ def p2d_pose_derivatives(precisions, precision_means, rotated, offsets, starts, 
     """
     n_points = offsets.shape[0]
     gradient = np.zeros(6)
-    gauss_newton = np.zeros((6, 6))
-    exact = np.zeros((6, 6))
+    blocks = np.zeros((2, 21))  # the Gauss-Newton matrix's and the exact Hessian's (_add_pose_blocks)
     outer = np.zeros((3, 3))
-    weight, hessian = np.empty((3, 3)), np.empty((3, 3))
-    skew_p, cross = np.empty((3, 3)), np.empty((3, 3))
     for n in range(n_points):
         d0, d1, d2 = offsets[n, 0], offsets[n, 1], offsets[n, 2]
         # The sums over the point's pairs in scalars (the 3x3 ones symmetric): kept in registers, where sums into
@@ -223,9 +262,6 @@ def p2d_pose_derivatives(precisions, precision_means, rotated, offsets, starts, 
             s11 += r * g1 * g1
             s12 += r * g1 * g2
             s22 += r * g2 * g2
-        _symmetric(w00, w01, w02, w11, w12, w22, weight)
-        _symmetric(w00 - s00 + m0 * m0, w01 - s01 + m0 * m1, w02 - s02 + m0 * m2, w11 - s11 + m1 * m1,
-                   w12 - s12 + m1 * m2, w22 - s22 + m2 * m2, hessian)
         p = rotated[n]
         for b in range(3):
             outer[0, b] += m0 * p[b]
@@ -237,12 +273,13 @@ def p2d_pose_derivatives(precisions, precision_means, rotated, offsets, starts, 
         gradient[3] += p[1] * m2 - p[2] * m1
         gradient[4] += p[2] * m0 - p[0] * m2
         gradient[5] += p[0] * m1 - p[1] * m0
-        _skew(p, skew_p)
-        _add_pose_matrix(skew_p, weight, 1.0, cross, gauss_newton)
-        _add_pose_matrix(skew_p, hessian, 1.0, cross, exact)
+        _add_pose_blocks(w00, w01, w02, w11, w12, w22, p, blocks[0])
+        _add_pose_blocks(w00 - s00 + m0 * m0, w01 - s01 + m0 * m1, w02 - s02 + m0 * m2, w11 - s11 + m1 * m1,
+                         w12 - s12 + m1 * m2, w22 - s22 + m2 * m2, p, blocks[1])
     gradient /= n_points
-    gauss_newton /= n_points
-    exact /= n_points
+    gauss_newton, exact = np.empty((6, 6)), np.empty((6, 6))
+    _pose_matrix(blocks[0], 1.0 / n_points, gauss_newton)
+    _pose_matrix(blocks[1], 1.0 / n_points, exact)
     outer /= n_points
     trace = outer[0, 0] + outer[1, 1] + outer[2, 2]
     for a in range(3):
@@ -316,6 +353,199 @@ def p2d_params_gradient(precisions, precision_means, local, jacobian, offsets, s
             for b in range(3):
                 gradient[3 + j] += outer[a, b] * jacobian[j, a, b]
     return gradient / n_points
+
+
+# ---- P2D's Gauss-Newton solver: solvers.minimise_gauss_newton's loop on these kernels
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _cholesky(matrix, factor):
+    """Lower Cholesky factor of a symmetric ``matrix`` into ``factor``; False if it is not positive definite."""
+    size = matrix.shape[0]
+    for j in range(size):
+        diagonal = matrix[j, j]
+        for k in range(j):
+            diagonal -= factor[j, k] * factor[j, k]
+        if not diagonal > 0.0:  # also NaN
+            return False
+        factor[j, j] = math.sqrt(diagonal)
+        for i in range(j + 1, size):
+            entry = matrix[i, j]
+            for k in range(j):
+                entry -= factor[i, k] * factor[j, k]
+            factor[i, j] = entry / factor[j, j]
+    return True
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _damped_step(hessian, gradient, damping, scratch, factor, step):
+    """``step = -(H + λ diag H)⁻¹ g`` by Cholesky (``H`` is positive definite or semi-definite here), or zero if
+    that matrix has no factor (solvers._damped_step's singular case)."""
+    size = gradient.shape[0]
+    for a in range(size):
+        for b in range(size):
+            scratch[a, b] = hessian[a, b]
+        scratch[a, a] += damping * hessian[a, a]
+    if not _cholesky(scratch, factor):
+        step[:] = 0.0
+        return
+    for a in range(size):  # L z = -g, then Lᵀ step = z
+        value = -gradient[a]
+        for k in range(a):
+            value -= factor[a, k] * step[k]
+        step[a] = value / factor[a, a]
+    for a in range(size - 1, -1, -1):
+        value = step[a]
+        for k in range(a + 1, size):
+            value -= factor[k, a] * step[k]
+        step[a] = value / factor[a, a]
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _step_size(step, scale):
+    """``max |step / scale|``: the stopping test's size of a step."""
+    size = 0.0
+    for a in range(6):
+        size = max(size, abs(step[a]) / scale[a])
+    return size
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _capped(step, length, scale, max_step, move):
+    """``move = length step``, shortened so that it turns by at most ``max_step`` radians and moves by at most
+    ``max_step`` RMS radii (solvers._capped); returns whether it was shortened."""
+    translation = rotation = 0.0
+    for a in range(3):
+        translation += (length * step[a] / scale[a]) ** 2
+        rotation += (length * step[3 + a]) ** 2
+    size = max(math.sqrt(translation), math.sqrt(rotation))
+    factor = length if size <= max_step else length * (max_step / size)
+    for a in range(6):
+        move[a] = factor * step[a]
+    return size > max_step
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _turned(rotvec, rotation, out):
+    """``out = exp([w]x) rotation`` (Rodrigues' formula, as dgmm.registration.rotations.exp_rotation)."""
+    x, y, z = rotvec[0], rotvec[1], rotvec[2]
+    theta2 = x * x + y * y + z * z
+    if theta2 < 1e-16:
+        a, b = 1.0, 0.5
+    else:
+        theta = math.sqrt(theta2)
+        a, b = math.sin(theta) / theta, (1.0 - math.cos(theta)) / theta2
+    turn = np.empty((3, 3))
+    turn[0, 0], turn[0, 1], turn[0, 2] = 1.0 - b * (y * y + z * z), b * x * y - a * z, b * x * z + a * y
+    turn[1, 0], turn[1, 1], turn[1, 2] = b * x * y + a * z, 1.0 - b * (x * x + z * z), b * y * z - a * x
+    turn[2, 0], turn[2, 1], turn[2, 2] = b * x * z - a * y, b * y * z + a * x, 1.0 - b * (x * x + y * y)
+    _product(turn, rotation, out)
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _next_over_relaxation(cost, slope, length, new_cost):
+    """solvers.next_over_relaxation."""
+    curvature = new_cost - cost - slope * length
+    best = -slope * length * length / (2.0 * curvature) if curvature > 0 else 2.0 * length
+    return max(1.0, min(best, 2.0 * length))
+
+
+ENDED, SEARCH_FAILED, NOT_FINITE = 0, 1, 2
+"""How :func:`p2d_gauss_newton` stopped."""
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def p2d_gauss_newton(local, shift, table, precisions, precision_means, screen, scale, max_iter, tol, damping,
+                     max_step, constants, rotations, translations, costs):
+    """:func:`dgmm.registration.solvers.minimise_gauss_newton` on the P2D kernels, from the pose ``rotations[0]``,
+    ``translations[0]`` (``x -> R x_n + c + t'`` of the ``local`` points ``x_n``): the same steps, line search,
+    damping and stopping rule, with no Python between the kernels.
+
+    Parameters
+    ----------
+    local, table, precisions, precision_means, screen
+        As :func:`p2d_negative_mean_log_likelihood` and :func:`p2d_pose_derivatives` take them.
+    shift : ndarray of shape (3,)
+        ``c - origin``.
+    scale : ndarray of shape (6,)
+        The stopping test's units of ``(δ, ω)``.
+    max_iter, tol, damping, max_step
+        The solver's options.
+    constants : tuple
+        The solver's ``(OVER_RELAXATION, _NEWTON_CONTRACTION, _MIN_DAMPING, _MAX_DAMPING, _BACKTRACKS)``.
+    rotations, translations, costs : ndarray of shape (max_iter + 1, 3, 3), (max_iter + 1, 3), (max_iter + 1,)
+        Filled with the pose ``(R, t')`` and cost after each iteration (row 0: the start).
+
+    Returns
+    -------
+    iterations : int
+    converged : bool
+    status : int
+        :data:`ENDED` (converged, or ``max_iter`` iterations: the pose is row ``iterations``),
+        :data:`SEARCH_FAILED` (no pose along the last step lowered the cost: the pose is row ``iterations - 1``) or
+        :data:`NOT_FINITE` (the cost or its derivatives stopped being finite at iteration ``iterations``).
+    """
+    over_relaxation, contraction, min_damping, max_damping, backtracks = constants
+    n_points, n_components = local.shape[0], table.shape[1]
+    kept = p2d_pose_buffers(n_points, n_components)
+    trial = p2d_pose_buffers(n_points, n_components)
+    scratch, factor = np.empty((6, 6)), np.zeros((6, 6))
+    step, move, offset = np.empty(6), np.empty(6), np.empty(3)
+    rotation, translation = rotations[0].copy(), translations[0].copy()
+    new_rotation = np.empty((3, 3))
+    for a in range(3):
+        offset[a] = shift[a] + translation[a]
+    cost = p2d_negative_mean_log_likelihood(local, rotation, offset, table, screen, *kept)
+    costs[0] = cost
+    iteration = 0
+    converged = False
+    while iteration < max_iter and not converged:
+        gradient, gauss_newton, exact = p2d_pose_derivatives(precisions, precision_means, *kept)
+        if not (np.isfinite(cost) and np.all(np.isfinite(gradient)) and np.all(np.isfinite(gauss_newton))):
+            return iteration, False, NOT_FINITE
+        newton = _cholesky(exact, factor)
+        hessian = exact if newton else gauss_newton
+        slope, length, new_cost, capped = 0.0, 1.0, cost, False
+        iteration += 1
+        found = False
+        while True:
+            _damped_step(hessian, gradient, damping, scratch, factor, step)
+            _capped(step, 1.0, scale, max_step, step)
+            converged = _step_size(step, scale) < tol
+            if converged:  # the pose moves by less than tol: no need to evaluate it
+                break
+            slope = gradient @ step
+            length = 1.0 if newton else over_relaxation
+            for attempt in range(backtracks + 1):  # the line search of solvers._line_search
+                capped = _capped(step, length, scale, max_step, move)
+                _turned(move[3:], rotation, new_rotation)
+                for a in range(3):
+                    offset[a] = shift[a] + translation[a] + move[a]
+                new_cost = p2d_negative_mean_log_likelihood(local, new_rotation, offset, table, screen, *trial)
+                if new_cost <= cost:
+                    found = True
+                    break
+                if attempt < backtracks:
+                    curvature = new_cost - cost - slope * length
+                    length *= min(max(-slope * length / (2.0 * curvature), 0.1), 0.5) if curvature > 0 else 0.1
+            if found or damping > max_damping:
+                break
+            damping *= 10.0
+        if found:
+            rotation[:, :] = new_rotation
+            translation += move[:3]
+            kept, trial = trial, kept
+            if not newton:
+                over_relaxation = _next_over_relaxation(cost, slope, length, new_cost)
+            cost = new_cost
+            damping = max(damping / 10.0, min_damping)
+            converged = (newton and length == 1.0 and not capped
+                         and contraction * _step_size(step, scale) ** 2 < tol)
+        elif not converged:
+            return iteration, False, SEARCH_FAILED
+        rotations[iteration] = rotation
+        translations[iteration] = translation
+        costs[iteration] = cost
+    return iteration, converged, ENDED
 
 
 # ---- D2D

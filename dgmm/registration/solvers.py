@@ -8,10 +8,11 @@ Both minimise a cost of the pose ``x -> R (x - c) + c + t'`` about a fixed centr
 - ``"gauss-newton"``: each step solves ``(H + λ diag H) (δ, ω) = -g`` for a translation ``δ`` and a left rotation
   ``R -> exp([ω]x) R``, where ``g`` is the cost's exact gradient and ``H`` its Hessian where that is positive
   definite (Newton steps near the optimum), else a positive semi-definite Gauss-Newton matrix with the
-  responsibilities of the current pose (EM-ICP, FilterReg). A step is kept only if it lowers the cost (else
-  ``λ`` grows tenfold); a kept Gauss-Newton step, which far from the optimum falls short like an EM step, is
-  stretched 2, 4, 8 times while the cost keeps falling; no step exceeds ``max_step``. It stops when a step moves
-  less than ``tol`` (radians, and RMS radii of the moving points).
+  responsibilities of the current pose (EM-ICP, FilterReg). A Gauss-Newton step, which far from the optimum falls
+  short like an EM step (8-16 times on the bunny's P2D), is over-relaxed: taken ``η`` times, ``η`` carried from
+  step to step and set by the cost's parabola along the last one. A step is kept if it lowers the cost, else
+  shortened by the parabola up to 3 times (then ``λ`` grows tenfold); no step exceeds ``max_step``. It stops when a
+  step moves less than ``tol`` (radians, and RMS radii of the moving points).
 """
 from __future__ import annotations
 
@@ -105,14 +106,20 @@ def minimise_bfgs(method, cost, centre, length, x0, gradient, callback, options)
 
 _GAUSS_NEWTON_DEFAULTS = {"max_iter": 100, "tol": 1e-8, "damping": 1e-4, "max_step": 0.3}
 _MIN_DAMPING, _MAX_DAMPING = 1e-12, 1e12
-_STRETCH = (2.0, 4.0, 8.0)
 _BACKTRACKS = 3
+OVER_RELAXATION = 8.0
+"""The first Gauss-Newton step's multiplier ``η``. On the 20 bunny trials of benchmarks/registration_peers.py (P2D,
+mesh-kmeans), the cost along a first Gauss-Newton step falls until 8-16 times the step; starting ``η`` at 4, 8 and 16
+took 9.6, 9.3 and 9.5 cost evaluations a registration (8.35, 7.85 and 8.1 iterations)."""
 _NEWTON_CONTRACTION = 100.0
 """Near the optimum Newton's steps shrink quadratically, ``|s_{k+1}| ≈ κ |s_k|²`` (scaled as the stopping test):
 fr1/xyz's odometry registrations (250 frames, 1,241 pairs of a full Newton step and the step after it) have κ a median
 4.6, 90th percentile 48 and 99th 175. After a full Newton step with ``κ |s|² < tol`` for this κ the next step would
 be below ``tol``, and Gauss-Newton stops without the derivatives at the new pose (of the 514 such steps there, one
 was followed by a step above ``tol = 1e-4``: 1.4e-4)."""
+GAUSS_NEWTON_CONSTANTS = (OVER_RELAXATION, _NEWTON_CONTRACTION, _MIN_DAMPING, _MAX_DAMPING, _BACKTRACKS)
+"""The constants of :func:`minimise_gauss_newton`, as the compiled P2D loop takes them
+(:func:`dgmm.compiled.registration.p2d_gauss_newton`)."""
 
 
 def pose_derivatives(rotated, gradient, *weights):
@@ -198,14 +205,9 @@ def minimise_gauss_newton(method, evaluate, centre, length, rotation, translatio
     -------
     Registration
     """
-    settings = {**_GAUSS_NEWTON_DEFAULTS, **(options or {})}
-    unknown = set(settings) - set(_GAUSS_NEWTON_DEFAULTS)
-    if unknown:
-        raise InputError(f"unknown gauss-newton options {sorted(unknown)}: use {sorted(_GAUSS_NEWTON_DEFAULTS)}")
-    max_iter, tol, damping = int(settings["max_iter"]), float(settings["tol"]), float(settings["damping"])
-    max_step = float(settings["max_step"])
+    max_iter, tol, damping, max_step = gauss_newton_settings(options)
     start = time.perf_counter()
-    scale = np.array([length if length > 0 else 1.0] * 3 + [1.0] * 3)
+    scale = step_scale(length)
 
     def snapshot(value, iterations, converged):
         return Registration(rotation, translation + centre - rotation @ centre, iterations,
@@ -214,11 +216,11 @@ def minimise_gauss_newton(method, evaluate, centre, length, rotation, translatio
     cost, derivatives = evaluate(rotation, translation)
     converged = False
     iteration = 0
+    over_relaxation = OVER_RELAXATION
     while iteration < max_iter and not converged:
         gradient, hessian, exact = derivatives()
         if not (np.isfinite(cost) and np.all(np.isfinite(gradient)) and np.all(np.isfinite(hessian))):
-            raise FitError(f"{method} registration: the cost or its derivatives are not finite at Gauss-Newton "
-                           f"iteration {iteration}: check that source and target are in the same units and overlap")
+            raise not_finite(method, iteration)
         newton = exact is not None and _positive_definite(exact)
         if newton:
             hessian = exact
@@ -230,12 +232,15 @@ def minimise_gauss_newton(method, evaluate, centre, length, rotation, translatio
             if converged:  # the pose moves by less than tol: no need to evaluate it
                 break
             found = _line_search(evaluate, rotation, translation, cost, gradient @ step, step, scale, max_step,
-                                 not newton)
+                                 1.0 if newton else over_relaxation)
             if found is not None or damping > _MAX_DAMPING:
                 break
             damping *= 10.0
         if found is not None:
-            rotation, translation, cost, derivatives, full = found
+            rotation, translation, new_cost, derivatives, length, full = found
+            if not newton:
+                over_relaxation = next_over_relaxation(cost, gradient @ step, length, new_cost)
+            cost = new_cost
             damping = max(damping / 10.0, _MIN_DAMPING)
             converged = newton and full and _NEWTON_CONTRACTION * np.max(np.abs(step) / scale) ** 2 < tol
         elif not converged:
@@ -245,34 +250,55 @@ def minimise_gauss_newton(method, evaluate, centre, length, rotation, translatio
     return snapshot(cost, iteration, converged)
 
 
-def _line_search(evaluate, rotation, translation, cost, slope, step, scale, max_step, stretch):
-    """The first pose along ``step`` that lowers the cost: the full step, else up to 3 shorter ones (the minimum
-    of the parabola through the cost, its slope and the last trial, kept within 0.1–0.5 of it). With ``stretch``
-    (Gauss-Newton steps, which fall short far from the optimum like EM steps) a full step that lowers the cost is
-    stretched 2, 4, 8 times while the cost keeps falling. Returns ``(rotation, translation, cost, derivatives,
-    full)``, ``full`` whether the pose is the whole step uncapped, or None."""
+def gauss_newton_settings(options):
+    """``(max_iter, tol, damping, max_step)`` of :func:`minimise_gauss_newton`'s ``options`` over its defaults."""
+    settings = {**_GAUSS_NEWTON_DEFAULTS, **(options or {})}
+    unknown = set(settings) - set(_GAUSS_NEWTON_DEFAULTS)
+    if unknown:
+        raise InputError(f"unknown gauss-newton options {sorted(unknown)}: use {sorted(_GAUSS_NEWTON_DEFAULTS)}")
+    return int(settings["max_iter"]), float(settings["tol"]), float(settings["damping"]), float(settings["max_step"])
+
+
+def step_scale(length):
+    """Units of ``(δ, ω)`` in the stopping test and the cap: ``length`` for the translation, radians."""
+    return np.array([length if length > 0 else 1.0] * 3 + [1.0] * 3)
+
+
+def not_finite(method, iteration):
+    """The FitError of a cost or derivatives that stopped being finite."""
+    return FitError(f"{method} registration: the cost or its derivatives are not finite at Gauss-Newton iteration "
+                    f"{iteration}: check that source and target are in the same units and overlap")
+
+
+def next_over_relaxation(cost, slope, length, new_cost):
+    """The next Gauss-Newton step's multiplier after one kept at ``length`` times the step: the minimum of the
+    parabola through the cost, its slope along the step and the new cost (at least half ``length``, the new cost
+    being no higher), at most twice ``length`` and at least 1."""
+    curvature = new_cost - cost - slope * length
+    best = -slope * length * length / (2.0 * curvature) if curvature > 0 else 2.0 * length
+    return max(1.0, min(best, 2.0 * length))
+
+
+def _line_search(evaluate, rotation, translation, cost, slope, step, scale, max_step, length):
+    """The first pose along ``step`` that lowers the cost: ``length`` times the step, else up to 3 shorter ones (the
+    minimum of the parabola through the cost, its slope and the last trial, kept within 0.1–0.5 of it). Returns
+    ``(rotation, translation, cost, derivatives, length, full)``, ``full`` whether the pose is the whole step
+    uncapped, or None."""
     def at(length):
         wanted = length * step
         move = _capped(wanted, scale, max_step)
         new_rotation, new_translation = exp_rotation(move[3:]) @ rotation, translation + move[:3]
-        return (new_rotation, new_translation, *evaluate(new_rotation, new_translation),
+        return (new_rotation, new_translation, *evaluate(new_rotation, new_translation), length,
                 length == 1.0 and move is wanted)
 
-    found, length = at(1.0), 1.0
+    found = at(length)
     for _ in range(_BACKTRACKS):
         if found[2] <= cost:
-            break
+            return found
         curvature = found[2] - cost - slope * length
         length *= np.clip(-slope * length / (2.0 * curvature), 0.1, 0.5) if curvature > 0 else 0.1
         found = at(length)
-    if found[2] > cost:
-        return None
-    for factor in (_STRETCH if stretch and length == 1.0 else ()):
-        far = at(factor)
-        if far[2] >= found[2]:
-            break
-        found = far
-    return found
+    return found if found[2] <= cost else None
 
 
 def check_solver(solver, gradient):
