@@ -17,12 +17,12 @@ $(STAMP): pyproject.toml
 run: $(STAMP)
 	$(VENV)/bin/snakemake --cores $(CORES)
 
-test: $(STAMP)
+test: $(STAMP)  # on $(CORES) pytest-xdist workers, each test module on one (tests/conftest.py)
 	bash tests/system_packages.sh
-	$(VENV)/bin/python -m pytest -q
+	$(VENV)/bin/python -m pytest -q -n $(CORES) --dist loadscope
 
 check: $(STAMP)
-	$(VENV)/bin/python -m pytest -q -m "not slow"
+	$(VENV)/bin/python -m pytest -q -n $(CORES) --dist loadscope -m "not slow"
 
 docs: $(STAMP)  # the site into docs/_build/html, running the gallery's examples on one thread; warnings are errors
 	OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 MKL_NUM_THREADS=1 \

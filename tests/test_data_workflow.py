@@ -1,4 +1,5 @@
-"""The data stage run by real Snakemake on tests/config.yaml in a temporary working directory.
+"""The data stage run by real Snakemake on tests/config.yaml: the session's workflow run (conftest.py), broken mirrors
+in runs of their own, and the config check.
 
 Expected counts come from the mirror's SOURCE.md (bunny 34834 used vertices / 69451 faces, res4 453 / 948) and
 from the config's budgets; nothing is compared with numbers the workflow printed.
@@ -10,7 +11,7 @@ import trimesh
 import yaml
 
 from dgmm.data import load_mesh, load_points
-from tests.workflow import REPO, TEST_CONFIG, TEST_CONFIG_FILE, run_snakemake
+from tests.workflow import REPO, TEST_CONFIG, TEST_CONFIG_FILE, config_error, run_snakemake
 
 DATA = TEST_CONFIG["data"]
 
@@ -28,12 +29,9 @@ def test_test_config_mirror_is_the_shared_stanford_folder():
 
 
 @pytest.fixture(scope="module")
-def built(tmp_path_factory):
-    """A working directory where `snakemake data` ran once on the tiny config."""
-    workdir = tmp_path_factory.mktemp("workflow")
-    run = _snakemake(workdir, "data")
-    assert run.returncode == 0, run.stderr[-3000:]
-    return workdir / "results"
+def built(workflow_run):
+    """The results of the session's workflow run, whose stages start with `snakemake data` on the tiny config."""
+    return workflow_run / "results"
 
 
 @pytest.mark.slow
@@ -91,9 +89,18 @@ def test_wrong_sha256_fails_without_output(tmp_path):
 
 @pytest.mark.slow
 def test_bad_config_value_names_the_key(tmp_path):
+    """The suite's one real dry run of a bad config: the Snakefile stops before any job, naming the key (the other
+    bad configs are checked in process by ``config_error``, the same validation)."""
     config = {**yaml.safe_load(TEST_CONFIG_FILE.read_text())}
     config["data"] = {**DATA, "eval_points": -5}
     (tmp_path / "config.yaml").write_text(yaml.safe_dump(config))
+    assert "On instance['data']['eval_points']" in config_error(config)
     run = _snakemake(tmp_path, "-n", "data", configfile=tmp_path / "config.yaml")
     assert run.returncode != 0
-    assert "eval_points" in run.stdout + run.stderr
+    assert "On instance['data']['eval_points']" in run.stdout + run.stderr
+    assert not (tmp_path / "results").exists()
+
+
+def test_the_test_config_passes_the_config_check():
+    """The control of every bad-config test: tests/config.yaml itself passes, so a bad value is what fails."""
+    assert config_error(TEST_CONFIG) == ""

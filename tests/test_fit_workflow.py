@@ -1,4 +1,5 @@
-"""The fitting sweep run by real Snakemake on tests/config.yaml: numbers, recordings, interruption."""
+"""The fitting sweep run by real Snakemake on tests/config.yaml (the session's workflow run, conftest.py): numbers,
+recordings; interruption and resumption in a directory of their own."""
 import os
 import shutil
 import signal
@@ -22,12 +23,10 @@ pytestmark = pytest.mark.slow
 
 
 @pytest.fixture(scope="module")
-def sweep(tmp_path_factory):
-    """Results of one uninterrupted `snakemake fits` on the tiny config."""
-    workdir = tmp_path_factory.mktemp("fits")
-    run = run_snakemake(workdir, "fits")
-    assert run.returncode == 0, run.stderr[-3000:]
-    return workdir / "results"
+def sweep(workflow_run):
+    """Results of the session's uninterrupted workflow run (conftest.py), which includes `snakemake fits` on the tiny
+    config."""
+    return workflow_run / "results"
 
 
 def mean_eval(rows):
@@ -104,8 +103,8 @@ def test_every_recording_reads_back_and_matches_the_table(sweep):
         n_iter = int(seeds[0]["n_iter"])
         assert mixture["iteration"] == list(range(1, n_iter + 1))
         assert all(len(centers) == int(seeds[0]["K"]) for centers in mixture["Ellipsoids3D:centers"])
-    recordings = sorted(sweep.rglob("*.rrd"))
-    assert len(recordings) > len(jobs)  # the fits and Fig 2's
+    recordings = sorted([*(sweep / "fits").rglob("*.rrd"), *(sweep / "fig2").rglob("*.rrd")])
+    assert len(recordings) == len(jobs) + 1  # the fits and Fig 2's
     for path in recordings:  # each opens on its blueprint
         timeline, views = read_blueprint(path)
         assert timeline == "iteration" and views["bound"] == ("TimeSeries", "/bound", ["$origin/**"]), path

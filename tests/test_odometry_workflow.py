@@ -1,5 +1,5 @@
-"""The odometry stage (Fig 7) run by real Snakemake on tests/config.yaml: 8 frames of the synthetic sequence, and a
-configured TUM folder that is missing (reported pending).
+"""The odometry stage (Fig 7) run by real Snakemake on tests/config.yaml (the session's workflow run, conftest.py): 8
+frames of the synthetic sequence, and a configured TUM folder that is missing (reported pending).
 
 References are independent of the code under test: evo's APE (Umeyama alignment without scale) recomputed from the
 written TUM files, numpy's reading of those files for the MCAP poses, `rerun rrd verify`, Pillow for the PNG.
@@ -19,7 +19,7 @@ from dgmm.odometry.tum import read_sequence
 from dgmm.runtime.tables import read_csv
 from tests.test_recording import read_blueprint, read_mcap, read_rrd, xyz
 from tests.reference_tables import assert_within_bands
-from tests.workflow import RERUN, TEST_CONFIG, TEST_CONFIG_FILE, run_snakemake
+from tests.workflow import RERUN, TEST_CONFIG, TEST_CONFIG_FILE, config_error, run_snakemake
 
 RUNS = {"gmm-pixels-textbook": ("gmm-pixels", "textbook"), "gmm-points-textbook": ("gmm-points", "textbook"),
         "icp": ("icp", "")}
@@ -33,22 +33,25 @@ AUTHORS_FRAMES = TEST_CONFIG["odometry"]["authors_frames"]
 MISSING = TEST_CONFIG["odometry"]["sequences"][0]
 
 
-def write_config(tmp_path, **odometry):
-    """tests/config.yaml with its odometry section updated; returns the new file's path."""
+def odometry_config(**odometry):
+    """tests/config.yaml with its odometry section updated."""
     config = yaml.safe_load(TEST_CONFIG_FILE.read_text())
     config["odometry"] = {**config["odometry"], **odometry}
+    return config
+
+
+def write_config(tmp_path, **odometry):
+    """:func:`odometry_config` written to a file in ``tmp_path``; returns the file's path."""
     path = tmp_path / "config.yaml"
-    path.write_text(yaml.safe_dump(config))
+    path.write_text(yaml.safe_dump(odometry_config(**odometry)))
     return path
 
 
 @pytest.fixture(scope="module")
-def stage(tmp_path_factory):
-    """Results of one `snakemake odometry` on the tiny config (no TUM folder: the synthetic sequence)."""
-    workdir = tmp_path_factory.mktemp("odometry")
-    run = run_snakemake(workdir, "odometry")
-    assert run.returncode == 0, run.stderr[-3000:]
-    return workdir / "results"
+def stage(workflow_run):
+    """Results of the session's workflow run (conftest.py), which includes `snakemake odometry` on the tiny config (no
+    TUM folder: the synthetic sequence)."""
+    return workflow_run / "results"
 
 
 def tum_rows(path):
@@ -243,18 +246,13 @@ def test_seconds_summary_adds_the_mean_model_and_registration_times():
     assert summary["mean_seconds_per_frame"] == pytest.approx(2.0 + 1.0)
 
 
-@pytest.mark.slow
-def test_bad_config_value_names_the_key(tmp_path):
-    run = run_snakemake(tmp_path, "-n", "odometry", configfile=write_config(tmp_path, frames=1), timeout=300)
-    assert run.returncode != 0
-    assert "frames" in run.stdout + run.stderr
+def test_bad_config_value_names_the_key():
+    """Fewer than 3 frames stop the workflow before any job (the config check, run in process), naming the key."""
+    assert "On instance['odometry']['frames']" in config_error(odometry_config(frames=1))
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("key, value", [("protocols", ["ours", "authors"]), ("authors_frames", 1)])
-def test_bad_protocol_settings_name_the_key(tmp_path, key, value):
-    """An unknown protocol and a prefix of fewer than 3 frames stop the workflow before any job, naming the key."""
-    run = run_snakemake(tmp_path / "work", "-n", "odometry", configfile=write_config(tmp_path, **{key: value}),
-                        timeout=300)
-    assert run.returncode != 0
-    assert key in run.stdout + run.stderr
+def test_bad_protocol_settings_name_the_key(key, value):
+    """An unknown protocol and a prefix of fewer than 3 frames stop the workflow before any job (the config check,
+    run in process), naming the key."""
+    assert f"On instance['odometry']['{key}']" in config_error(odometry_config(**{key: value}))

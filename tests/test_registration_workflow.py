@@ -1,4 +1,5 @@
-"""The registration stage run by real Snakemake on tests/config.yaml: tables, shared trials, recordings.
+"""The registration stage run by real Snakemake on tests/config.yaml (the session's workflow run, conftest.py): tables,
+shared trials, recordings; a chunk rerun on a copy.
 
 Expected rows come from the test config; trial poses are checked against the authors' protocol (Euler angles
 within ±15°, translations within ±0.05 per axis scaled by the diagonal over the bunny's 0.24077) and the table's
@@ -18,7 +19,7 @@ from dgmm.experiments.trials import METHODS, method_variants, mixture_source
 from dgmm.runtime.tables import read_csv
 from tests.test_recording import read_blueprint, read_mcap, read_rrd, xyz
 from tests.reference_tables import assert_within_bands
-from tests.workflow import RERUN, TEST_CONFIG, run_snakemake
+from tests.workflow import RERUN, TEST_CONFIG, copy_run, run_snakemake
 
 REG = TEST_CONFIG["registration"]
 COLUMNS = ["model", "mesh", "protocol", "variant", "method", "trial", "rotation_error_deg", "translation_error_pct",
@@ -27,12 +28,10 @@ pytestmark = pytest.mark.slow
 
 
 @pytest.fixture(scope="module")
-def workdir(tmp_path_factory):
-    """Working directory of one `snakemake registration` on the tiny config."""
-    workdir = tmp_path_factory.mktemp("registration")
-    run = run_snakemake(workdir, "registration")
-    assert run.returncode == 0, run.stderr[-3000:]
-    return workdir
+def workdir(workflow_run):
+    """Working directory of the session's workflow run (conftest.py), which includes `snakemake registration` on the
+    tiny config."""
+    return workflow_run
 
 
 @pytest.fixture(scope="module")
@@ -205,8 +204,7 @@ def test_every_rrd_verifies_and_shows_the_first_trials_moving(workdir, table):
 
 def test_rerun_chunk_gives_the_same_table_bytes(workdir, tmp_path):
     """Delete one chunk's outputs in a copy of the run; Snakemake redoes it and the table is byte-identical."""
-    copy = tmp_path / "copy"
-    shutil.copytree(workdir, copy)
+    copy = copy_run(workdir, tmp_path / "copy")
     chunk = copy / "results" / "registration" / "bunny" / "res4" / "scaled" / "textbook" / "points-random" / "c1"
     shutil.rmtree(chunk)
     table = Path("results") / "tables" / "registration.csv"

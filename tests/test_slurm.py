@@ -11,6 +11,7 @@ import shutil
 import signal
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -149,11 +150,28 @@ def slurm_jobs(run, env):
 
 @pytest.fixture(scope="module")
 def local(config, tmp_path_factory):
-    """The tiny sweep run locally (`--cores 2`): working directory and wall time."""
+    """The tiny sweep run locally (`--cores 2`), started at once so that it runs while the cluster starts and runs its
+    own copy (mostly waiting on Slurm): a function that waits for it and returns its working directory and wall
+    time."""
     workdir = tmp_path_factory.mktemp("local")
-    seconds, run = snakemake(workdir, config, "--cores", "2")
-    assert run.returncode == 0, run.stderr[-3000:]
-    return workdir, seconds
+    command = [str(SNAKEMAKE), "--snakefile", str(REPO / "Snakefile"), "--directory", str(workdir),
+               "--configfile", str(config), "--cores", "2", TARGET]
+    start = time.monotonic()
+    with open(workdir.with_name("local.out"), "w") as out:
+        process = subprocess.Popen(command, stdout=out, stderr=subprocess.STDOUT, cwd=REPO)
+    ended = []  # when it exited, noted by a thread that waits for it
+    waiter = threading.Thread(target=lambda: ended.append((process.wait(), time.monotonic())), daemon=True)
+    waiter.start()
+
+    def finished():
+        waiter.join(timeout=RUN_TIMEOUT)
+        assert ended and ended[0][0] == 0, workdir.with_name("local.out").read_text()[-3000:]
+        return workdir, ended[0][1] - start
+
+    yield finished
+    if process.poll() is None:
+        process.kill()
+        process.wait()
 
 
 @pytest.fixture(scope="module")
@@ -166,11 +184,11 @@ def slurm(cluster, config, tmp_path_factory):
 
 
 def test_the_sweep_on_slurm_gives_the_local_likelihood_table_byte_for_byte(local, slurm, cluster):
-    (local_dir, local_seconds), (slurm_dir, slurm_seconds, run) = local, slurm
+    (local_dir, local_seconds), (slurm_dir, slurm_seconds, run) = local(), slurm
     assert (slurm_dir / TARGET).read_bytes() == (local_dir / TARGET).read_bytes()
     jobs = slurm_jobs(run, cluster)
-    print(f"\ntiny sweep: local {local_seconds:.0f} s, Slurm {slurm_seconds:.0f} s with {len(jobs)} Slurm jobs "
-          f"({(slurm_seconds - local_seconds) / len(jobs):.0f} s overhead per Slurm job)")
+    print(f"\ntiny sweep, side by side: local {local_seconds:.0f} s, Slurm {slurm_seconds:.0f} s with {len(jobs)} "
+          f"Slurm jobs ({(slurm_seconds - local_seconds) / len(jobs):.0f} s overhead per Slurm job)")
 
 
 def test_jobs_ask_slurm_for_their_rules_resources_and_fits_are_batched(slurm, cluster):
