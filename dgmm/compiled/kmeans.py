@@ -47,26 +47,22 @@ def kmeans_plusplus_seeds(points, weights, first, uniforms):
     closest = np.empty(n_points)
     _squared_distances(points, points[first], closest)
     cumulative = np.empty(n_points)
-    reach = np.empty(n_points)
-    best_reach = np.empty(n_points)
+    reach = np.empty((n_trials, n_points))
     for seed in range(1, n_seeds):
         total = 0.0
         for i in range(n_points):
             total += weights[i] * closest[i]
             cumulative[i] = total
-        best, best_potential = -1, np.inf
+        best, best_potential = 0, np.inf
         for trial in range(n_trials):
             candidate = min(np.searchsorted(cumulative, uniforms[seed - 1, trial] * total), n_points - 1)
-            _squared_distances(points, points[candidate], reach)
-            potential = 0.0
+            _squared_distances(points, points[candidate], reach[trial])
             for i in range(n_points):
-                reach[i] = min(closest[i], reach[i])
-                potential += weights[i] * reach[i]
+                reach[trial, i] = min(closest[i], reach[trial, i])
+            potential = np.dot(reach[trial], weights)  # BLAS: a running sum in a loop would not vectorise
             if potential < best_potential:
-                best, best_potential = candidate, potential
-                best_reach[:] = reach
-        chosen[seed] = best
-        closest[:] = best_reach
+                best, best_potential, chosen[seed] = trial, potential, candidate
+        closest[:] = reach[best]
     return chosen
 
 
