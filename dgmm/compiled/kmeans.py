@@ -99,7 +99,7 @@ def lloyd_pass(points, weights, centres, labels):
             for j in range(BLOCK):
                 closer = values[k, j] < nearest[j]
                 label[j] = k if closer else label[j]
-                nearest[j] = min(values[k, j], nearest[j])
+                nearest[j] = np.minimum(values[k, j], nearest[j])
         for j in range(size):
             labels[first + j] = label[j]
     mass = np.zeros(n_clusters)
