@@ -16,7 +16,7 @@ from functools import cached_property
 
 import numpy as np
 
-from dgmm.gaussian import layout, unpack
+from dgmm.gaussian import layout
 from dgmm.mixture import EStep, _moment_features
 from dgmm.odometry.overlap import centroid_and_radius
 from dgmm.registration import register_d2d
@@ -133,64 +133,38 @@ def cut(frame, unseen):
     -------
     weights, means, covariances : ndarrays of shape (K,), (K, 3), (K, 3, 3)
     """
-    mixture, prims = frame.mixture, frame.primitives
+    from dgmm.compiled.measured_cut import cut_components  # numba loads only for the schedules that cut
+    mixture = frame.mixture
     weights, means = mixture.weights_, mixture.means_
-    regulariser = mixture.reg_covar * np.eye(3)  # the M-step adds it to every covariance: the moments are without
-    covariances = mixture.covariances_ - regulariser
-    mass = weights * frame.variant_weights[1].sum()
     rows = np.flatnonzero(unseen)
     if not len(rows):
         return weights, means, mixture.covariances_
-    lost, about, second = unseen_moments(frame, rows)
-    # The sums about each component's mean from those about the E-step's centre c:
-    # Σ r (x - μ) = s - m d and Σ r (x - μ)(x - μ)ᵀ = S - s dᵀ - d sᵀ + m d dᵀ, with y = x - c, d = μ - c.
-    d = means - frame.last_e_step[0].centre
-    first = about - lost[:, None] * d
-    second = (second - about[:, :, None] * d[:, None, :] - d[:, :, None] * about[:, None, :]
-              + lost[:, None, None] * d[:, :, None] * d[:, None, :])
-    left = mass - lost
-    kept = left > _MIN_MASS * mass
-    shift = -first[kept] / left[kept, None]
-    means = means.copy()
-    means[kept] += shift
-    covariances[kept] = ((mass[kept, None, None] * covariances[kept] - second[kept]) / left[kept, None, None]
-                         - shift[:, :, None] * shift[:, None, :])
-    # An EM short of its fixed point (or rounding) can leave a variance below 0: floored, then reg_covar added.
-    values, vectors = np.linalg.eigh(covariances[kept])
-    floor = np.maximum(values, 1e-6 * np.maximum(values[:, 2:], 0.0))
-    covariances[kept] = (vectors * floor[:, None, :]) @ np.transpose(vectors, (0, 2, 1))
-    covariances += regulariser
-    if not kept.any():  # the other frame sees none of it: nothing to cut to
+    regulariser = mixture.reg_covar * np.eye(3)  # the M-step adds it to every covariance: the moments are without
+    e_step = frame.last_e_step[0]
+    left, means, covariances = cut_components(means, mixture.covariances_ - regulariser,
+                                              weights * frame.variant_weights[1].sum(), unseen_sums(frame, rows),
+                                              e_step.centre, e_step.unit, _MIN_MASS)
+    if not left.any():  # the other frame sees none of it: nothing to cut to
         return weights, mixture.means_, mixture.covariances_
-    cut_weights = np.where(kept, left, 0.0)
-    return cut_weights / cut_weights.sum(), means, covariances
+    return left / left.sum(), means, covariances + regulariser
 
 
-def unseen_moments(frame, rows):
-    """The M-step sums of the primitives ``rows`` under the responsibilities of the fit's last E-step: mass
-    ``m_k = Σ r_pk a_p``, first moments ``s_k = Σ r_pk a_p (x_p - c)`` and second moments
-    ``S_k = Σ r_pk a_p ((x_p - c)(x_p - c)ᵀ + C_p)`` about the E-step's centre ``c``, in one compiled pass
-    (:func:`dgmm.compiled.e_step.screened_e_step_sums`, the fit's own E-step kernel, screened as the fit was).
-
-    Returns
-    -------
-    mass, first, second : ndarrays of shape (K,), (K, 3), (K, 3, 3)
-    """
+def unseen_sums(frame, rows):
+    """The M-step sums of the primitives ``rows`` under the responsibilities of the fit's last E-step, about the
+    E-step's centre ``c`` in its unit ``u``: ``Σ r_pk a_p`` times the moment table's columns ``xx, yy, zz, 2xy, 2xz,
+    2yz, x, y, z, 1`` of ``(x_p - c) / u`` (``C_p / u²`` on the second moments), shape (K, 10); one compiled pass
+    (:func:`dgmm.compiled.e_step.screened_e_step_sums`, the fit's own E-step kernel, screened as the fit was)."""
     from dgmm.compiled.e_step import screened_e_step_sums  # numba loads only for the schedules that cut
     e_step, coefficients = frame.last_e_step
     scale, mstep_weights = frame.variant_weights
-    shape = layout(3)
-    points, prim_covariances = frame.primitives.means[rows], frame.primitives.covariances[rows]
-    moments = _moment_features(points, prim_covariances, e_step.centre, None, e_step.unit)  # internal units
+    n_quadratic = layout(3).n_quadratic
+    moments = _moment_features(frame.primitives.means[rows], frame.primitives.covariances[rows], e_step.centre,
+                               None, e_step.unit)
     features = moments.copy()
-    features[:, :shape.n_quadratic] *= scale[rows, None]
+    features[:, :n_quadratic] *= scale[rows, None]
     screen = np.inf if e_step.screen is None else float(e_step.screen)
-    sums = screened_e_step_sums(features, coefficients, np.ascontiguousarray(moments[:, :shape.n_quadratic]),
+    return screened_e_step_sums(features, coefficients, np.ascontiguousarray(moments[:, :n_quadratic]),
                                 mstep_weights[rows], screen, np.empty(len(rows)))
-    packed = sums[:, :shape.n_second].copy()
-    packed[:, shape.d:] *= 0.5  # the features' doubled off-diagonals
-    unit = e_step.unit
-    return sums[:, shape.one], sums[:, shape.mean] * unit, unpack(packed) * unit**2
 
 
 def _cut_mixture(frame, unseen):
