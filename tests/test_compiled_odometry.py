@@ -1,0 +1,78 @@
+"""The odometry frame's compiled kernels (dgmm.compiled.kmeans, .visibility, .measured_cut) against their numpy
+formulas, computed here by brute force."""
+import numpy as np
+import pytest
+
+from dgmm.compiled.kmeans import BLOCK, cluster_scatter, lloyd_pass
+from dgmm.compiled.measured_cut import _floored
+from dgmm.compiled.visibility import seen_on_grid
+
+RNG = np.random.default_rng(3)
+POINTS = RNG.normal(size=(3 * BLOCK + 5, 3))  # a last, partial block
+WEIGHTS = RNG.uniform(0.1, 2.0, len(POINTS))
+CENTRES = RNG.normal(size=(7, 3))
+
+
+def test_a_lloyd_pass_labels_each_point_with_its_nearest_centre_and_sums_its_clusters():
+    squared = np.sum((POINTS[:, None] - CENTRES[None]) ** 2, axis=2)
+    labels = np.empty(len(POINTS), dtype=np.int64)
+    mass, sums = lloyd_pass(POINTS, WEIGHTS, CENTRES, labels)
+    np.testing.assert_array_equal(labels, squared.argmin(axis=1))
+    np.testing.assert_allclose(mass, np.bincount(labels, WEIGHTS, minlength=len(CENTRES)), rtol=1e-14)
+    for d in range(3):
+        np.testing.assert_allclose(sums[:, d], np.bincount(labels, WEIGHTS * POINTS[:, d], minlength=len(CENTRES)),
+                                   rtol=1e-13, atol=1e-14)
+
+
+def test_a_tie_goes_to_the_first_centre():
+    labels = np.empty(1, dtype=np.int64)
+    lloyd_pass(np.zeros((1, 3)), np.ones(1), np.array([[2.0, 0, 0], [1.0, 0, 0], [-1.0, 0, 0]]), labels)
+    assert labels[0] == 1
+
+
+def test_the_cluster_scatter_is_the_weighted_outer_products_plus_covariances():
+    labels = RNG.integers(0, len(CENTRES), len(POINTS))
+    covariances = np.einsum("nij,nkj->nik", *(2 * [RNG.normal(size=(len(POINTS), 3, 3))]))
+    expected = np.zeros((len(CENTRES), 3, 3))
+    for x, w, c, k in zip(POINTS, WEIGHTS, covariances, labels):
+        offset = x - CENTRES[k]
+        expected[k] += w * (np.outer(offset, offset) + c)
+    np.testing.assert_allclose(cluster_scatter(POINTS, WEIGHTS, covariances, CENTRES, labels), expected,
+                               rtol=1e-13, atol=1e-13)
+
+
+def test_seen_on_grid_is_the_rounded_projection_onto_a_measured_pixel():
+    measured = RNG.random((12, 16)) < 0.7
+    camera = np.array([50.0, 55.0, 31.5, 23.5])
+    rotation = np.linalg.qr(RNG.normal(size=(3, 3)))[0]
+    rotation *= np.linalg.det(rotation)
+    translation = np.array([0.1, -0.2, 0.3])
+    points = RNG.normal(size=(500, 3)) + [0, 0, 2.0]
+    moved = points @ rotation.T + translation
+    front = moved[:, 2] > 0
+    z = np.where(front, moved[:, 2], 1.0)
+    col = np.rint((camera[0] * moved[:, 0] / z + camera[2]) / 4)
+    row = np.rint((camera[1] * moved[:, 1] / z + camera[3]) / 4)
+    inside = front & (col >= 0) & (col < 16) & (row >= 0) & (row < 12)
+    expected = np.zeros(len(points), dtype=bool)
+    expected[inside] = measured[row[inside].astype(int), col[inside].astype(int)]
+    assert 0 < expected.sum() < inside.sum() < len(points)
+    np.testing.assert_array_equal(seen_on_grid(points, rotation, translation, camera, 4, measured), expected)
+
+
+@pytest.mark.parametrize("values", [(-1e-4, 2e-3, 1e-2), (0.0, 1e-3, 1e-2), (1e-12, 1e-3, 1e-2)],
+                         ids=["negative", "zero", "below the floor"])
+def test_floored_lifts_small_eigenvalues_to_a_millionth_of_the_largest(values):
+    vectors = np.linalg.qr(RNG.normal(size=(3, 3)))[0]
+    covariance = (vectors * values) @ vectors.T
+    expected = (vectors * np.maximum(values, 1e-6 * values[2])) @ vectors.T
+    _floored(covariance)
+    np.testing.assert_allclose(covariance, expected, rtol=0, atol=1e-15)
+
+
+def test_floored_leaves_a_covariance_above_the_floor_as_it_is():
+    vectors = np.linalg.qr(RNG.normal(size=(3, 3)))[0]
+    covariance = (vectors * [1e-5, 1e-3, 1e-2]) @ vectors.T
+    before = covariance.copy()
+    _floored(covariance)
+    np.testing.assert_array_equal(covariance, before)
