@@ -3,9 +3,9 @@ iterations on all of them, and the hard-label M-step (paper §VI-D does not stat
 :mod:`dgmm.odometry.frame_model`).
 
 The loops run as numba kernels (:mod:`dgmm.compiled.kmeans`): scikit-learn's ``kmeans_plusplus`` spends nearly all
-of its time per frame validating its inputs once per seed, and a Lloyd pass compiled a block of points at a time
-labels a frame's primitives several times faster than numpy's product and argmin (measured:
-docs/benchmarks/odometry.md).
+of its time per frame validating its inputs once per seed, numpy's loop over the seeds four times the kernel's, and
+a Lloyd pass compiled a block of points at a time labels a frame's primitives in half the time of numpy's product
+and argmin (measured: docs/studies/odometry_constants.md).
 """
 from __future__ import annotations
 
