@@ -3,31 +3,14 @@ formulas, computed here by brute force."""
 import numpy as np
 import pytest
 
-from dgmm.compiled.kmeans import BLOCK, cluster_scatter, lloyd_pass
+from dgmm.compiled.kmeans import cluster_scatter
 from dgmm.compiled.measured_cut import _floored
 from dgmm.compiled.visibility import seen_on_grid
 
 RNG = np.random.default_rng(3)
-POINTS = RNG.normal(size=(3 * BLOCK + 5, 3))  # a last, partial block
+POINTS = RNG.normal(size=(101, 3))
 WEIGHTS = RNG.uniform(0.1, 2.0, len(POINTS))
 CENTRES = RNG.normal(size=(7, 3))
-
-
-def test_a_lloyd_pass_labels_each_point_with_its_nearest_centre_and_sums_its_clusters():
-    squared = np.sum((POINTS[:, None] - CENTRES[None]) ** 2, axis=2)
-    labels = np.empty(len(POINTS), dtype=np.int64)
-    mass, sums = lloyd_pass(POINTS, WEIGHTS, CENTRES, labels)
-    np.testing.assert_array_equal(labels, squared.argmin(axis=1))
-    np.testing.assert_allclose(mass, np.bincount(labels, WEIGHTS, minlength=len(CENTRES)), rtol=1e-14)
-    for d in range(3):
-        np.testing.assert_allclose(sums[:, d], np.bincount(labels, WEIGHTS * POINTS[:, d], minlength=len(CENTRES)),
-                                   rtol=1e-13, atol=1e-14)
-
-
-def test_a_tie_goes_to_the_first_centre():
-    labels = np.empty(1, dtype=np.int64)
-    lloyd_pass(np.zeros((1, 3)), np.ones(1), np.array([[2.0, 0, 0], [1.0, 0, 0], [-1.0, 0, 0]]), labels)
-    assert labels[0] == 1
 
 
 def test_the_cluster_scatter_is_the_weighted_outer_products_plus_covariances():

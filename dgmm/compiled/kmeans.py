@@ -1,13 +1,9 @@
-"""The odometry frames' EM start compiled with numba: greedy k-means++ seeds and Lloyd passes.
+"""The odometry frames' EM start compiled with numba: greedy k-means++ seeds and the hard-label moments.
 
 - :func:`kmeans_plusplus_seeds`: the greedy seeding loop, its uniform draws given (so the random stream is the
-  caller's, drawn in one call);
-- :func:`lloyd_pass`: every point's nearest centre and the clusters' weighted sums, a block of points at a time;
+  caller's, drawn in one call); where two candidates leave potentials equal to rounding, which one wins depends on
+  the order of the sums, so it can pick differently from a numpy loop at such a tie (none on 62 fr1/xyz frames);
 - :func:`cluster_scatter`: the clusters' weighted second moments about their centres.
-
-Each works on squared distances ``|x - c|²``; where two are equal to rounding, which one wins depends on the order
-of the sums, so these kernels and the numpy loops they replace can pick differently at exact ties (a start that
-then differs as a different seed's would).
 """
 from __future__ import annotations
 
@@ -64,52 +60,6 @@ def kmeans_plusplus_seeds(points, weights, first, uniforms):
                 best, best_potential, chosen[seed] = trial, potential, candidate
         closest[:] = reach[best]
     return chosen
-
-
-BLOCK = 32
-"""Points :func:`lloyd_pass` labels together: the loop over a block's points vectorises with each centre's 4
-coefficients held in registers (as :data:`dgmm.compiled.e_step.BLOCK`)."""
-
-
-@numba.njit(cache=True, nogil=True, error_model="numpy")
-def lloyd_pass(points, weights, centres, labels):
-    """Label every point with its nearest centre (``|x - c|² - |x|² = x · (-2c) + |c|²``, the first on a tie) into
-    ``labels``; return each cluster's weight (n_clusters,) and weighted sum of its points (n_clusters, 3)."""
-    n_points, n_clusters = points.shape[0], centres.shape[0]
-    lifted = np.empty((n_clusters, 4))
-    for k in range(n_clusters):
-        cx, cy, cz = centres[k, 0], centres[k, 1], centres[k, 2]
-        lifted[k, 0], lifted[k, 1], lifted[k, 2] = -2.0 * cx, -2.0 * cy, -2.0 * cz
-        lifted[k, 3] = cx * cx + cy * cy + cz * cz
-    block = np.zeros((3, BLOCK))  # a last, partial block's unused columns: finite, their labels unread
-    values = np.empty((n_clusters, BLOCK))
-    nearest = np.empty(BLOCK)
-    label = np.empty(BLOCK, dtype=np.int64)
-    for first in range(0, n_points, BLOCK):
-        size = min(BLOCK, n_points - first)
-        for j in range(size):
-            for d in range(3):
-                block[d, j] = points[first + j, d]
-        for k in range(n_clusters):
-            a0, a1, a2, a3 = lifted[k, 0], lifted[k, 1], lifted[k, 2], lifted[k, 3]
-            for j in range(BLOCK):
-                values[k, j] = block[0, j] * a0 + block[1, j] * a1 + block[2, j] * a2 + a3
-        nearest[:] = np.inf  # in a loop of its own: taken in the loop above, the running minimum kept it scalar
-        for k in range(n_clusters):
-            for j in range(BLOCK):
-                closer = values[k, j] < nearest[j]
-                label[j] = k if closer else label[j]
-                nearest[j] = np.minimum(values[k, j], nearest[j])
-        for j in range(size):
-            labels[first + j] = label[j]
-    mass = np.zeros(n_clusters)
-    sums = np.zeros((n_clusters, 3))
-    for i in range(n_points):
-        k, w = labels[i], weights[i]
-        mass[k] += w
-        for d in range(3):
-            sums[k, d] += w * points[i, d]
-    return mass, sums
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")

@@ -2,17 +2,23 @@
 iterations on all of them, and the hard-label M-step (paper §VI-D does not state the start; see
 :mod:`dgmm.odometry.frame_model`).
 
-The loops run as numba kernels (:mod:`dgmm.compiled.kmeans`): scikit-learn's ``kmeans_plusplus`` spends nearly all
-of its time per frame validating its inputs once per seed, numpy's loop over the seeds four times the kernel's, and
-a Lloyd pass compiled a block of points at a time labels a frame's primitives in half the time of numpy's product
-and argmin (measured: docs/studies/odometry_constants.md).
+k-means++ and the hard-label moments run as numba kernels (:mod:`dgmm.compiled.kmeans`): scikit-learn's
+``kmeans_plusplus`` spends nearly all of its time per frame validating its inputs once per seed, and numpy's loop over
+the seeds took four times the kernel's. Lloyd's labels stay numpy's product and argmin: a compiled pass took half the
+time but sums the distances in another order than BLAS, and a label that flips on a rounding tie changes the start
+(2 of 62 fr1/xyz frames), which moved the sweep's fr1/xyz ATEs by up to 2.9%, beyond a tenth of the seeds' spread
+(measured: docs/studies/odometry_constants.md).
 """
 from __future__ import annotations
 
 import numpy as np
 
-from dgmm.compiled.kmeans import cluster_scatter, kmeans_plusplus_seeds, lloyd_pass
+from dgmm.compiled.kmeans import cluster_scatter, kmeans_plusplus_seeds
 from dgmm.variants import VARIANTS
+
+_LABEL_BLOCK_BYTES = 2**19
+"""A Lloyd pass labels the primitives in blocks whose distances take this many bytes: they stay in the CPU's cache
+between the product and the argmin (measured: docs/studies/odometry_constants.md)."""
 
 
 def kmeans_plusplus(points, weights, n_clusters, rng, n_trials=None):
@@ -59,10 +65,16 @@ def lloyd_start(prims, n_components, seed_sample, lloyd_iter, variant, rng, reg_
     weights = np.ascontiguousarray(weights, dtype=np.float64)
     sample = rng.choice(len(points), size=min(seed_sample, len(points)), replace=False)
     centres = points[sample[kmeans_plusplus(points[sample], weights[sample], n_components, rng)]]
-    labels = np.empty(len(points), dtype=np.int64)
+    lifted = np.hstack([points, np.ones((len(points), 1))])
+    rows = max(1, _LABEL_BLOCK_BYTES // (8 * n_components))
     for _ in range(lloyd_iter + 1):  # the last pass only labels
-        mass, sums = lloyd_pass(points, weights, centres, labels)
+        # |x - c|² - |x|² = [x, 1] · [-2c, |c|²]: one product, the |x|² every row shares left out of the argmin
+        lifted_centres = np.vstack([-2.0 * centres.T, np.sum(centres ** 2, axis=1)])
+        labels = np.concatenate([(lifted[start:start + rows] @ lifted_centres).argmin(axis=1)
+                                 for start in range(0, len(points), rows)])
+        mass = np.bincount(labels, weights, minlength=n_components)
         present = mass > 0
+        sums = np.stack([np.bincount(labels, weights * points[:, d], minlength=n_components) for d in range(3)], 1)
         centres[present] = sums[present] / mass[present, None]
     covariances = cluster_scatter(points, weights, np.ascontiguousarray(prims.covariances, dtype=np.float64),
                                   centres, labels)
