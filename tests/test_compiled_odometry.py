@@ -1,27 +1,12 @@
-"""The odometry frame's compiled kernels (dgmm.compiled.kmeans, .visibility, .measured_cut) against their numpy
+"""The odometry frame's compiled kernels (dgmm.compiled.visibility, .measured_cut) against their numpy
 formulas, computed here by brute force."""
 import numpy as np
 import pytest
 
-from dgmm.compiled.kmeans import cluster_scatter
 from dgmm.compiled.measured_cut import _floored
 from dgmm.compiled.visibility import seen_on_grid
 
 RNG = np.random.default_rng(3)
-POINTS = RNG.normal(size=(101, 3))
-WEIGHTS = RNG.uniform(0.1, 2.0, len(POINTS))
-CENTRES = RNG.normal(size=(7, 3))
-
-
-def test_the_cluster_scatter_is_the_weighted_outer_products_plus_covariances():
-    labels = RNG.integers(0, len(CENTRES), len(POINTS))
-    covariances = np.einsum("nij,nkj->nik", *(2 * [RNG.normal(size=(len(POINTS), 3, 3))]))
-    expected = np.zeros((len(CENTRES), 3, 3))
-    for x, w, c, k in zip(POINTS, WEIGHTS, covariances, labels):
-        offset = x - CENTRES[k]
-        expected[k] += w * (np.outer(offset, offset) + c)
-    np.testing.assert_allclose(cluster_scatter(POINTS, WEIGHTS, covariances, CENTRES, labels), expected,
-                               rtol=1e-13, atol=1e-13)
 
 
 def test_seen_on_grid_is_the_rounded_projection_onto_a_measured_pixel():

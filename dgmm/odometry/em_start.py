@@ -2,23 +2,22 @@
 iterations on all of them, and the hard-label M-step (paper §VI-D does not state the start; see
 :mod:`dgmm.odometry.frame_model`).
 
-k-means++ and the hard-label moments run as numba kernels (:mod:`dgmm.compiled.kmeans`): scikit-learn's
-``kmeans_plusplus`` spends nearly all of its time per frame validating its inputs once per seed, and numpy's loop over
-the seeds took four times the kernel's. Lloyd's labels stay numpy's product and argmin: a compiled pass took half the
-time but sums the distances in another order than BLAS, and a label that flips on a rounding tie changes the start
-(2 of 62 fr1/xyz frames), which moved the sweep's fr1/xyz ATEs by up to 2.9%, beyond a tenth of the seeds' spread
-(measured: docs/studies/odometry_constants.md).
+Both steps are written out in numpy for speed: scikit-learn's ``kmeans_plusplus`` spends nearly all of its time
+per frame validating its inputs once per seed, several times what the same greedy algorithm costs here; a Lloyd
+pass's distances are one matrix product of the points with a column of ones against the centres (measured:
+docs/studies/odometry_constants.md).
 """
 from __future__ import annotations
 
 import numpy as np
 
-from dgmm.compiled.kmeans import cluster_scatter, kmeans_plusplus_seeds
 from dgmm.variants import VARIANTS
 
+_ROWS, _COLS = np.array([0, 1, 2, 0, 0, 1]), np.array([0, 1, 2, 1, 2, 2])  # the 6 distinct entries of a 3x3
 _LABEL_BLOCK_BYTES = 2**19
 """A Lloyd pass labels the primitives in blocks whose distances take this many bytes: they stay in the CPU's cache
 between the product and the argmin (measured: docs/studies/odometry_constants.md)."""
+_FULL = np.array([[0, 3, 4], [3, 1, 5], [4, 5, 2]])  # each entry of the full 3x3 in those 6
 
 
 def kmeans_plusplus(points, weights, n_clusters, rng, n_trials=None):
@@ -26,7 +25,7 @@ def kmeans_plusplus(points, weights, n_clusters, rng, n_trials=None):
 
     The first seed is drawn with probability ∝ weight; every later one is the best, by the weighted potential
     ``Σ w · D²`` it leaves, of ``n_trials`` candidates drawn with probability ∝ ``w · D²`` (``D``: distance to the
-    nearest seed so far; :func:`dgmm.compiled.kmeans.kmeans_plusplus_seeds`).
+    nearest seed so far).
 
     Parameters
     ----------
@@ -35,7 +34,6 @@ def kmeans_plusplus(points, weights, n_clusters, rng, n_trials=None):
         Non-negative, with at least ``n_clusters`` positive.
     n_clusters : int
     rng : numpy.random.Generator
-        Draws the first seed, then every candidate's uniform number in one call.
     n_trials : int, optional
         Candidates per seed; default ``2 + int(log(n_clusters))``, as scikit-learn.
 
@@ -45,10 +43,20 @@ def kmeans_plusplus(points, weights, n_clusters, rng, n_trials=None):
         The seeds' rows of ``points``.
     """
     n_trials = 2 + int(np.log(n_clusters)) if n_trials is None else n_trials
-    first = rng.choice(len(points), p=weights / weights.sum())
-    uniforms = rng.random((n_clusters - 1, n_trials))
-    points = np.ascontiguousarray(points, dtype=np.float64)
-    return kmeans_plusplus_seeds(points, np.ascontiguousarray(weights, dtype=np.float64), first, uniforms).tolist()
+    points = points - points.mean(axis=0)  # |x - c|² by its expansion below loses less about the centre
+    norms = np.einsum("ij,ij->i", points, points)
+    chosen = [rng.choice(len(points), p=weights / weights.sum())]
+    closest = np.maximum(norms + norms[chosen[0]] - 2.0 * points @ points[chosen[0]], 0.0)
+    for _ in range(1, n_clusters):  # sequential by nature: each seed depends on the ones before
+        cumulative = np.cumsum(weights * closest)
+        candidates = np.minimum(np.searchsorted(cumulative, rng.random(n_trials) * cumulative[-1]), len(points) - 1)
+        reach = norms[candidates, None] - 2.0 * points[candidates] @ points.T
+        reach += norms
+        np.minimum(closest, reach, out=reach)
+        best = int(np.argmin(reach @ weights))
+        chosen.append(int(candidates[best]))
+        closest = np.maximum(reach[best], 0.0)
+    return chosen
 
 
 def lloyd_start(prims, n_components, seed_sample, lloyd_iter, variant, rng, reg_covar):
@@ -61,8 +69,7 @@ def lloyd_start(prims, n_components, seed_sample, lloyd_iter, variant, rng, reg_
     k-means start does; an empty cluster gets the median covariance and a weight of ``1e-3 / K``.
     """
     _, weights = VARIANTS[variant](prims.weights)
-    points = np.ascontiguousarray(prims.means, dtype=np.float64)
-    weights = np.ascontiguousarray(weights, dtype=np.float64)
+    points = prims.means
     sample = rng.choice(len(points), size=min(seed_sample, len(points)), replace=False)
     centres = points[sample[kmeans_plusplus(points[sample], weights[sample], n_components, rng)]]
     lifted = np.hstack([points, np.ones((len(points), 1))])
@@ -76,8 +83,10 @@ def lloyd_start(prims, n_components, seed_sample, lloyd_iter, variant, rng, reg_
         present = mass > 0
         sums = np.stack([np.bincount(labels, weights * points[:, d], minlength=n_components) for d in range(3)], 1)
         centres[present] = sums[present] / mass[present, None]
-    covariances = cluster_scatter(points, weights, np.ascontiguousarray(prims.covariances, dtype=np.float64),
-                                  centres, labels)
+    offsets = points - centres[labels]
+    moments = offsets[:, _ROWS] * offsets[:, _COLS] + prims.covariances[:, _ROWS, _COLS]
+    covariances = np.stack([np.bincount(labels, weights * moments[:, m], minlength=n_components)
+                            for m in range(6)], 1)[:, _FULL]
     covariances[present] /= mass[present, None, None]
     if not present.all():
         covariances[~present] = np.median(covariances[present], axis=0)
