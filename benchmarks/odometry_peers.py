@@ -13,7 +13,8 @@ neighbours within 0.1 m, max correspondence distance 0.1 m, Open3D's default con
 ``libusb-1.0``; where the system lacks it, the ``libusb-package`` wheel's copy is loaded first.
 
 Usage: ``python benchmarks/odometry_peers.py [SEQUENCE_DIR] [--frames N] [--schedules fast reference]
-[--variants textbook authors] [--methods gmm-pixels gmm-points icp] [--no-peers]``.
+[--variants textbook authors] [--methods gmm-pixels gmm-points icp] [--peers gicp-0.02 gicp-0.05 open3d]``
+(``--peers`` with no name runs none).
 """
 import argparse
 import os
@@ -72,10 +73,10 @@ def open3d_method(voxel):
     return prepare, register
 
 
-PEERS = {
-    "small_gicp GICP, voxel 0.02 m": lambda: small_gicp_method(0.02),
-    "small_gicp GICP, voxel 0.05 m": lambda: small_gicp_method(0.05),
-    "Open3D point-to-plane ICP, voxel 0.02 m": lambda: open3d_method(0.02),
+PEERS = {  # --peers key -> (row name, method)
+    "gicp-0.02": ("small_gicp GICP, voxel 0.02 m", lambda: small_gicp_method(0.02)),
+    "gicp-0.05": ("small_gicp GICP, voxel 0.05 m", lambda: small_gicp_method(0.05)),
+    "open3d": ("Open3D point-to-plane ICP, voxel 0.02 m", lambda: open3d_method(0.02)),
 }
 
 
@@ -112,7 +113,8 @@ def main():
     parser.add_argument("--variants", nargs="+", default=["textbook", "authors"])
     parser.add_argument("--methods", nargs="*", default=["gmm-pixels", "gmm-points", "icp"])
     parser.add_argument("--icp-tol", type=float, default=1e-9, help="our ICP's stopping tolerance (m)")
-    parser.add_argument("--no-peers", action="store_true")
+    parser.add_argument("--peers", nargs="*", default=list(PEERS), choices=list(PEERS),
+                        help="the peers to run (none: --peers with no name)")
     parser.add_argument("--intrinsics", default=None, help="CAMERAS key; default from the folder name")
     args = parser.parse_args()
     sequence = read_sequence(args.sequence)
@@ -124,7 +126,7 @@ def main():
     print("| method | schedule | EM | ATE RMSE (m) | RPE (m/s) | RPE (deg/s) | CPU s/frame |")
     print("|---|---|---|---|---|---|---|")
     with threadpool_limits(1):
-        for name, make in ({} if args.no_peers else PEERS).items():
+        for name, make in (PEERS[key] for key in args.peers):
             trajectory, cpu = run_peer(sequence, frames, intrinsics, *make())
             print(row(name, "–", "–", trajectory, sequence.groundtruth, cpu), flush=True)
         for method in args.methods:

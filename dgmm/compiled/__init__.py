@@ -4,7 +4,9 @@
   exponentials of its responsibilities, the far pairs left out (``GaussianMixture(screen=...)``, the odometry
   frames' fits);
 - :mod:`~dgmm.compiled.registration`: the P2D cost and its derivatives for both solvers (``register_p2d``, the
-  sweep's registrations), and D2D's for Gauss-Newton (``register_d2d(solver="gauss-newton")``, odometry's).
+  sweep's registrations), and D2D's for Gauss-Newton (``register_d2d(solver="gauss-newton")``, odometry's);
+- :mod:`~dgmm.compiled.visibility`, :mod:`~dgmm.compiled.measured_cut`: the odometry cut rounds' visibility test
+  and their cut mixtures.
 
 The library imports them only where they run, so numba's import (about 0.2 s) and the loading of its on-disk cache
 (``cache=True``: compiled code beside each module, made by a machine's first run; about 0.15 s for P2D's kernels)

@@ -16,7 +16,8 @@ from functools import cached_property
 
 import numpy as np
 
-from dgmm.mixture import EStep
+from dgmm.gaussian import layout
+from dgmm.mixture import EStep, _moment_features
 from dgmm.odometry.overlap import centroid_and_radius
 from dgmm.registration import register_d2d
 from dgmm.variants import VARIANTS
@@ -63,8 +64,9 @@ class MeasuredFrame:
     @cached_property
     def last_e_step(self):
         """The E-step of the fit's last M-step (under ``mixture.e_step_params_``, screened as the fit was), set up
-        once for every cut."""
-        return EStep(*self.mixture.e_step_params_, screen=self.mixture.screen)
+        once for every cut, with its coefficients laid out for :func:`dgmm.compiled.e_step.screened_e_step_sums`."""
+        e_step = EStep(*self.mixture.e_step_params_, screen=self.mixture.screen)
+        return e_step, np.ascontiguousarray(e_step.coefficients.T)
 
     @cached_property
     def variant_weights(self):
@@ -72,27 +74,30 @@ class MeasuredFrame:
         return VARIANTS[self.variant](self.primitives.weights)
 
 
-def seen_by(points, frame):
-    """Which camera-frame points project onto a pixel of ``frame``'s grid that measured depth.
+def seen_by(points, frame, rotation=None, translation=None):
+    """Which points, moved by ``(rotation, translation)`` into ``frame``'s camera, project onto a pixel of its grid
+    that measured depth (:func:`dgmm.compiled.visibility.seen_on_grid`).
 
     Parameters
     ----------
     points : ndarray of shape (n, 3)
-        In ``frame``'s camera coordinates.
     frame : MeasuredFrame
+    rotation : ndarray of shape (3, 3), optional
+        The identity when omitted: ``points`` in ``frame``'s camera coordinates.
+    translation : ndarray of shape (3,), optional
+        Zero when omitted.
 
     Returns
     -------
     seen : ndarray of bool, shape (n,)
         In front of the camera and nearest to a grid pixel (``u, v`` multiples of ``step``) with a measurement.
     """
-    u, v, front = frame.intrinsics.project(points)
-    col, row = np.rint(u / frame.step), np.rint(v / frame.step)
-    rows, cols = frame.measured.shape
-    inside = front & (col >= 0) & (col < cols) & (row >= 0) & (row < rows)
-    seen = np.zeros(len(points), dtype=bool)
-    seen[inside] = frame.measured[row[inside].astype(int), col[inside].astype(int)]
-    return seen
+    from dgmm.compiled.visibility import seen_on_grid  # numba loads only for the schedules that cut
+    rotation = np.eye(3) if rotation is None else np.ascontiguousarray(rotation, dtype=float)
+    translation = np.zeros(3) if translation is None else np.asarray(translation, dtype=float)
+    camera = frame.intrinsics
+    return seen_on_grid(np.ascontiguousarray(points, dtype=float), rotation, translation,
+                        np.array([camera.fx, camera.fy, camera.cx, camera.cy]), frame.step, frame.measured)
 
 
 def unseen_primitives(fixed, moving, rotation, translation):
@@ -102,8 +107,8 @@ def unseen_primitives(fixed, moving, rotation, translation):
     -------
     fixed_unseen, moving_unseen : ndarrays of bool, shape (n_primitives,) of each frame
     """
-    fixed_unseen = ~seen_by((fixed.primitives.means - translation) @ rotation, moving)
-    moving_unseen = ~seen_by(moving.primitives.means @ rotation.T + translation, fixed)
+    fixed_unseen = ~seen_by(fixed.primitives.means, moving, rotation.T, -rotation.T @ translation)
+    moving_unseen = ~seen_by(moving.primitives.means, fixed, rotation, translation)
     return fixed_unseen, moving_unseen
 
 
@@ -128,45 +133,38 @@ def cut(frame, unseen):
     -------
     weights, means, covariances : ndarrays of shape (K,), (K, 3), (K, 3, 3)
     """
-    mixture, prims = frame.mixture, frame.primitives
+    from dgmm.compiled.measured_cut import cut_components  # numba loads only for the schedules that cut
+    mixture = frame.mixture
     weights, means = mixture.weights_, mixture.means_
-    regulariser = mixture.reg_covar * np.eye(3)  # the M-step adds it to every covariance: the moments are without
-    covariances = mixture.covariances_ - regulariser
-    scale, mstep_weights = frame.variant_weights
-    mass = weights * mstep_weights.sum()
     rows = np.flatnonzero(unseen)
     if not len(rows):
         return weights, means, mixture.covariances_
-    points, prim_covariances = prims.means[rows], prims.covariances[rows]
-    resp = frame.last_e_step.responsibilities(points, prim_covariances, scale[rows])
-    resp *= mstep_weights[rows, None]
-    lost = resp.sum(axis=0)
-    # The sums about each component's mean from sums about one centre c (matrix products over the primitives):
-    # Σ r (x - μ) = s - m d and Σ r (x - μ)(x - μ)ᵀ = S - s dᵀ - d sᵀ + m d dᵀ, with y = x - c, d = μ - c.
-    centre = points.mean(axis=0)
-    offsets = points - centre
-    moments = resp.T @ np.concatenate([offsets, (offsets[:, :, None] * offsets[:, None, :]).reshape(-1, 9)
-                                       + prim_covariances.reshape(-1, 9)], axis=1)
-    about, d = moments[:, :3], means - centre
-    first = about - lost[:, None] * d
-    second = (moments[:, 3:].reshape(-1, 3, 3) - about[:, :, None] * d[:, None, :] - d[:, :, None] * about[:, None, :]
-              + lost[:, None, None] * d[:, :, None] * d[:, None, :])
-    left = mass - lost
-    kept = left > _MIN_MASS * mass
-    shift = -first[kept] / left[kept, None]
-    means = means.copy()
-    means[kept] += shift
-    covariances[kept] = ((mass[kept, None, None] * covariances[kept] - second[kept]) / left[kept, None, None]
-                         - shift[:, :, None] * shift[:, None, :])
-    # An EM short of its fixed point (or rounding) can leave a variance below 0: floored, then reg_covar added.
-    values, vectors = np.linalg.eigh(covariances[kept])
-    floor = np.maximum(values, 1e-6 * np.maximum(values[:, 2:], 0.0))
-    covariances[kept] = (vectors * floor[:, None, :]) @ np.transpose(vectors, (0, 2, 1))
-    covariances += regulariser
-    if not kept.any():  # the other frame sees none of it: nothing to cut to
+    regulariser = mixture.reg_covar * np.eye(3)  # the M-step adds it to every covariance: the moments are without
+    e_step = frame.last_e_step[0]
+    left, means, covariances = cut_components(means, mixture.covariances_ - regulariser,
+                                              weights * frame.variant_weights[1].sum(), unseen_sums(frame, rows),
+                                              e_step.centre, e_step.unit, _MIN_MASS)
+    if not left.any():  # the other frame sees none of it: nothing to cut to
         return weights, mixture.means_, mixture.covariances_
-    cut_weights = np.where(kept, left, 0.0)
-    return cut_weights / cut_weights.sum(), means, covariances
+    return left / left.sum(), means, covariances + regulariser
+
+
+def unseen_sums(frame, rows):
+    """The M-step sums of the primitives ``rows`` under the responsibilities of the fit's last E-step, about the
+    E-step's centre ``c`` in its unit ``u``: ``Σ r_pk a_p`` times the moment table's columns ``xx, yy, zz, 2xy, 2xz,
+    2yz, x, y, z, 1`` of ``(x_p - c) / u`` (``C_p / u²`` on the second moments), shape (K, 10); one compiled pass
+    (:func:`dgmm.compiled.e_step.screened_e_step_sums`, the fit's own E-step kernel, screened as the fit was)."""
+    from dgmm.compiled.e_step import screened_e_step_sums  # numba loads only for the schedules that cut
+    e_step, coefficients = frame.last_e_step
+    scale, mstep_weights = frame.variant_weights
+    n_quadratic = layout(3).n_quadratic
+    moments = _moment_features(frame.primitives.means[rows], frame.primitives.covariances[rows], e_step.centre,
+                               None, e_step.unit)
+    features = moments.copy()
+    features[:, :n_quadratic] *= scale[rows, None]
+    screen = np.inf if e_step.screen is None else float(e_step.screen)
+    return screened_e_step_sums(features, coefficients, np.ascontiguousarray(moments[:, :n_quadratic]),
+                                mstep_weights[rows], screen, np.empty(len(rows)))
 
 
 def _cut_mixture(frame, unseen):

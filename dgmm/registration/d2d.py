@@ -9,7 +9,7 @@ surface overlap little: a fifth of the pairs or fewer), each pair a row of ``(n_
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import partial
+from functools import cached_property, partial
 
 import numpy as np
 
@@ -41,15 +41,11 @@ class PairTables:
     moving_covariances : ndarray of shape (n_moving, 3, 3)
     log_weights : ndarray of shape (n_fixed, n_moving)
         ``log πᵢ + log πⱼ``.
-    inverse_widths : ndarray of shape (n_fixed, n_moving)
-        ``1 / (λmax(Σᵢ) + λmax(Σⱼ))``.
-    normals : ndarray of shape (n_fixed, 3)
-        Eigenvector ``nᵢ`` of the smallest eigenvalue of each ``Σᵢ``.
-    normal_outer : ndarray of shape (n_fixed, 6)
-        The 6 distinct entries of ``nᵢ nᵢᵀ``, the off-diagonal ones doubled: ``normal_outer @ C6`` is ``nᵀ C n``.
-    thickness : ndarray of shape (n_fixed,)
-        That smallest eigenvalue.
     centre : ndarray of shape (3,)
+
+    The screen's bounds (:meth:`candidates`, the numpy cost's) read the eigen-decompositions, computed on first use:
+    the compiled cost screens by the terms themselves and never needs them (:attr:`inverse_widths`,
+    :attr:`normals`, :attr:`normal_outer`, :attr:`thickness`).
     """
 
     fixed: FittedMixture
@@ -58,25 +54,42 @@ class PairTables:
     offsets: np.ndarray
     moving_covariances: np.ndarray
     log_weights: np.ndarray
-    inverse_widths: np.ndarray
-    normals: np.ndarray
-    normal_outer: np.ndarray
-    thickness: np.ndarray
     centre: np.ndarray
 
     @classmethod
     def of(cls, fixed, moving, centre):
         """The tables of two :class:`FittedMixture` and the centre of rotation ``c`` (3,)."""
-        fixed_values, fixed_vectors = np.linalg.eigh(fixed.covariances)
-        moving_widths = np.linalg.eigvalsh(moving.covariances)[:, 2]
-        normals = fixed_vectors[:, :, 0]
         return cls(fixed=fixed, fixed_means=fixed.means.T.copy(),
                    fixed_covariances=fixed.covariances[:, _ROWS, _COLS].T.copy(), offsets=moving.means - centre,
                    moving_covariances=moving.covariances,
-                   log_weights=np.log(fixed.weights)[:, None] + np.log(moving.weights)[None, :],
-                   inverse_widths=1.0 / (fixed_values[:, 2:] + moving_widths[None, :]), normals=normals,
-                   normal_outer=quadratic_features(normals)[:, :6],
-                   thickness=fixed_values[:, 0], centre=centre)
+                   log_weights=np.log(fixed.weights)[:, None] + np.log(moving.weights)[None, :], centre=centre)
+
+    @cached_property
+    def _fixed_eigen(self):
+        """Eigenvalues (ascending) and eigenvectors of every ``Σᵢ``."""
+        return np.linalg.eigh(self.fixed.covariances)
+
+    @cached_property
+    def inverse_widths(self):
+        """``1 / (λmax(Σᵢ) + λmax(Σⱼ))``, shape (n_fixed, n_moving)."""
+        moving_widths = np.linalg.eigvalsh(self.moving_covariances)[:, 2]
+        return 1.0 / (self._fixed_eigen[0][:, 2:] + moving_widths[None, :])
+
+    @cached_property
+    def normals(self):
+        """Eigenvector ``nᵢ`` of the smallest eigenvalue of each ``Σᵢ``, shape (n_fixed, 3)."""
+        return self._fixed_eigen[1][:, :, 0]
+
+    @cached_property
+    def normal_outer(self):
+        """The 6 distinct entries of ``nᵢ nᵢᵀ``, the off-diagonal ones doubled, shape (n_fixed, 6):
+        ``normal_outer @ C6`` is ``nᵀ C n``."""
+        return quadratic_features(self.normals)[:, :6]
+
+    @cached_property
+    def thickness(self):
+        """The smallest eigenvalue of each ``Σᵢ``, shape (n_fixed,)."""
+        return self._fixed_eigen[0][:, 0]
 
     def candidates(self, moved, rotated_covariances):
         """Indices ``(i, j)`` of the pairs whose term may be within ``e^-SCREEN`` of the largest.
