@@ -1,5 +1,5 @@
 # `make run` runs the full sweep and its report; `make test` runs the test suite (CI: .ci/run); `make check` runs
-# the fast tests (no Snakemake, Slurm or browser; under a minute); `make docs` builds the documentation site. All
+# the fast tests (no Snakemake, Slurm or browser; about a minute); `make docs` builds the documentation site. All
 # create .venv and install the project when needed; only `make test` installs Debian packages.
 PYTHON ?= python3
 VENV := .venv
