@@ -21,7 +21,8 @@ import numpy as np
 SCREEN = 50.0
 """Nats below a row's largest term beyond which terms are left out: ``e^-50 ≈ 2e-22``, so even 10⁵ of them add under
 ``2e-17`` to a sum of at least 1, below half its last place (``1.1e-16``). EM's screened E-step (``GaussianMixture(
-screen=SCREEN)``, every odometry frame's fit), the P2D kernels and D2D's derivatives leave out the same pairs."""
+screen=SCREEN)``, every odometry frame's fit), the P2D kernels, D2D's derivatives and scoring
+leave out the same pairs."""
 
 _LOG_2PI = np.log(2.0 * np.pi)
 

@@ -50,13 +50,13 @@ from sklearn.utils.validation import check_is_fitted, validate_data
 
 from dgmm.em_blocks import DEFAULT_MEMORY_LIMIT, BlockPass
 from dgmm.errors import FitError, InputError, InputTypeError
-from dgmm.gaussian import layout, log_density_coefficients, quadratic_features, unpack
+from dgmm.gaussian import SCREEN, layout, log_density_coefficients, quadratic_features, unpack
 from dgmm.primitives import Primitives, as_primitives
 from dgmm.variants import INITS, VARIANTS
 
 _EPS = 10.0 * np.finfo(np.float64).eps
-# Bytes of log rho per block when scoring: a block stays in the CPU cache through the normalisation's passes (2x
-# faster than 64k-row blocks at K = 100-400 on 50k points); rows are scored independently, so blocks change no bit
+# Bytes of log rho per block when scoring: a block stays in the CPU cache from its product to its log-normalisers;
+# rows are scored independently, so blocks change no bit
 # (with the padding below).
 _SCORE_BLOCK_BYTES = 1 << 20
 # Scoring products are padded with zero rows to a multiple of this: BLAS computes the rows past the last full tile
@@ -235,13 +235,6 @@ def _normalise_in_place(log_rho, screen=None):
     return peak + np.log(total)
 
 
-def _log_normaliser(log_rho):
-    """``logsumexp_i log rho`` per primitive (n_rows,), overwriting ``log rho`` (scoring needs no
-    responsibilities)."""
-    peak, total = _exp_shifted_in_place(log_rho)
-    return peak + np.log(total)
-
-
 def _scaled_table(table, scale):
     """The moment table with the E-step ``scale`` (n_rows,) on its columns but the last, made once per fit: the
     table itself when every scale is 1 (textbook EM)."""
@@ -327,6 +320,19 @@ class EStep:
         ``_SCORE_ROW_TILE`` and every block but the last a multiple of it: BLAS then computes each row the same
         whatever the other rows, so scores do not depend on how the primitives are split.
         """
+        return (rows.T for rows in self._log_rho_rows(means, covariances, scale))
+
+    def log_normalisers(self, means, covariances):
+        """``logsumexp_i log rho`` of each primitive (n_rows,), the textbook E-step's, in one compiled pass a block
+        (:mod:`dgmm.compiled.scoring`: the terms below ``e^-SCREEN`` of a primitive's best left out, which changes
+        no sum beyond rounding, :data:`dgmm.gaussian.SCREEN`)."""
+        from dgmm.compiled.scoring import screened_log_normalisers  # numba loads only where a mixture scores
+
+        blocks = self._log_rho_rows(means, covariances, 1.0)
+        return np.concatenate([screened_log_normalisers(rows, SCREEN) for rows in blocks])
+
+    def _log_rho_rows(self, means, covariances, scale):
+        """:meth:`log_rho_blocks` as (n_rows, n_components) blocks, each C-contiguous."""
         scale = np.broadcast_to(np.asarray(scale, dtype=float), (len(means),))
         tile = _SCORE_ROW_TILE
         rows = max(tile, _SCORE_BLOCK_BYTES // (8 * len(self.coefficients)) // tile * tile)
@@ -337,7 +343,7 @@ class EStep:
             features[count:] = 0.0
             _moment_features(means[block], covariances[block], self.centre, scale[block], self.unit,
                              out=features[:count])
-            yield np.dot(features, self.coefficients.T)[:count].T
+            yield np.dot(features, self.coefficients.T)[:count]
 
     def responsibilities(self, means, covariances, scale=1.0):
         """Responsibilities of the primitives ``(means, covariances)``, shape (n_rows, n_components)."""
@@ -572,7 +578,8 @@ class GaussianMixture(DensityMixin, BaseEstimator):
         paper): pairs whose term is below ``e^-s`` of the primitive's largest get responsibility 0 and no
         exponential (:mod:`dgmm.compiled.e_step`); at ``s = 50`` the fit is the unscreened one to rounding, in a
         fraction of the E-step's time on surfaces (3-D; in other dimensions the exponentials alone are
-        screened). The k-means start and scoring are not screened.
+        screened). The k-means start is not screened; scoring always leaves out the terms below ``e^-50``,
+        which changes no score beyond rounding (:mod:`dgmm.compiled.scoring`).
 
     Attributes
     ----------
@@ -805,7 +812,7 @@ class GaussianMixture(DensityMixin, BaseEstimator):
         return EStep(*self._full_parameters()).log_rho_blocks(prims.means, prims.covariances)
 
     def _log_norm(self, prims):
-        log_norm = np.concatenate([_log_normaliser(block) for block in self._log_rho_blocks(prims)])
+        log_norm = EStep(*self._full_parameters()).log_normalisers(prims.means, prims.covariances)
         if not np.all(np.isfinite(log_norm)):
             raise InputError(f"{np.count_nonzero(~np.isfinite(log_norm))} of {len(log_norm)} primitives have a "
                              f"log-likelihood beyond float64 under this mixture: they lie too far from it")
