@@ -11,7 +11,7 @@ from dgmm.experiments.report.claims.grading import EVERY, LOSS, PLAIN, TIE, WIN,
 from dgmm.experiments.report.claims.inits import cells, median, still_climbing, versus_rivals
 from dgmm.experiments.report.claims.record import CONVERGENCE, LIKELIHOOD, PerEmClaim
 from dgmm.experiments.report.claims.rules import (FIG3_INPUTS, FIG3_MODEL, LONGER_FITS, TEXT, Cause, Claim, by_cause,
-                                                  em, em_switch, graded_share, is_mesh, listing, misses, pending,
+                                                  em, em_switch, graded_share, is_mesh, listed, listing, misses, pending,
                                                   same, switch_or_not_found)
 
 CONVERGED = "n_iter_within_0.01"
@@ -86,7 +86,7 @@ def _nearly_comparisons(data, variant):
             closing = _half_minus(exact) - _half_minus(points)
             compared.append(compare(f"{label} closes half", closing,
                                     detail=f"{gap25:+.3f} at 25, {gap100:+.3f} at 100"))
-    return compared, listing(compared)
+    return listed(compared)
 
 
 def _nearly_cause(data, variant, grades, compared):
@@ -145,7 +145,7 @@ def _ratios(data, variant):
 def _third_comparisons(data, variant):
     ratios = _ratios(data, variant)
     if not ratios:
-        return [], ""
+        return None
     typical = median(ratios)
     near = sum(abs(ratio - THIRD) <= ROUNDING for ratio in ratios)
     comparison = within("median", typical, THIRD, ROUNDING, detail=f"points / exact {typical:.2f}")
@@ -178,7 +178,7 @@ def _faster_comparisons(data, variant):
         ours, theirs = _column(exact, CONVERGED), _column(points, CONVERGED)
         compared.append(compare(f"{name} K={k} {init}", theirs - ours, detail=f"exact {ours:.1f}, points "
                                                                              f"{theirs:.1f}"))
-    return compared, listing(compared)
+    return listed(compared)
 
 
 def _faster_cause(data, variant, grades, compared):
@@ -209,7 +209,7 @@ def _quality_comparisons(data, variant):
         if EXACT in cell and rivals:
             compared.append(versus_rivals(f"{init} K={k}", cell[EXACT], rivals,
                                           lambda rival, value: f"{cell[EXACT]:.3f} vs {rival} {value:.3f}")[1])
-    return compared, listing(compared)
+    return listed(compared)
 
 
 def _quality_cause(data, variant, grades, compared):

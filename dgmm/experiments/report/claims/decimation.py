@@ -14,7 +14,7 @@ from dgmm.experiments.report.claims.inits import (cells, init_contrast, init_gap
                                                   versus_rivals)
 from dgmm.experiments.report.claims.record import LIKELIHOOD, PerEmClaim
 from dgmm.experiments.report.claims.rules import (FIG3_INPUTS, FIG3_MODEL, FIG4_INPUTS, HIGH_K, LONGER_FITS,
-                                                  OWN_CELLS, Cause, Claim, em, graded_share, is_mesh, listing, misses,
+                                                  OWN_CELLS, Cause, Claim, em, graded_share, is_mesh, listed, listing, misses,
                                                   missing, pending, same, switch_or_not_found)
 from dgmm.experiments.report.claims.timings import timing_claim
 from dgmm.experiments.report.tables import STORED_MAX_ITER
@@ -44,7 +44,7 @@ def _pairwise_comparisons(winner, loser, data, variant):
     compared = [compare(f"{init} K={k}", cell[winner] - cell[loser], detail=f"{cell[winner]:.3f} vs {cell[loser]:.3f}")
                 for (init, k), cell in cells(data.estimates, FIG3_MODEL, FIG4_INPUTS, variant).items()
                 if {winner, loser} <= cell.keys()]
-    return compared, listing(compared)
+    return listed(compared)
 
 
 def _pairwise_cause(winner, loser, data, variant, grades, compared):
@@ -101,7 +101,7 @@ def _often_best_comparisons(data, variant):
                   for name, value in cell.items() if (name, init) != (POISSON, "kmeans")}
         compared.append(versus_rivals(f"K={k}", ours, rivals,
                                       lambda rival, value: f"{ours:.3f} vs {rival} {value:.3f}")[1])
-    return compared, listing(compared)
+    return listed(compared)
 
 
 def _often_best_cause(data, variant, grades, compared):
@@ -132,7 +132,7 @@ def _lowest_comparisons(data, variant):
                         detail=f"{cell[name]:.3f} vs {cell[RANDOM]:.3f}")
                 for (init, k), cell in cells(data.estimates, FIG3_MODEL, FIG4_INPUTS, variant).items()
                 if RANDOM in cell for name in FIG4_INPUTS if name in cell and name != RANDOM]
-    return compared, listing(compared)
+    return listed(compared)
 
 
 def _lowest_cause(data, variant, grades, compared):
@@ -165,8 +165,9 @@ def _reliable_comparisons(data, variant):
     table = cells(data.estimates, FIG3_MODEL, FIG4_INPUTS, variant)
     compared = _steps(table, [name for name in FIG4_INPUTS if is_mesh(name)])
     falls = [c for c in _steps(table, [n for n in FIG4_INPUTS if not is_mesh(n)]) if c.outcome == LOSS]
-    return compared, (f"{listing(compared)}; point inputs fall in {len(falls)} steps "
-                      f"({'; '.join(map(str, falls))})") if compared else ""
+    if not compared:
+        return None
+    return compared, f"{listing(compared)}; point inputs fall in {len(falls)} steps ({'; '.join(map(str, falls))})"
 
 
 def _reliable_cause(data, variant, grades, compared):
@@ -226,7 +227,7 @@ _EXACT = tuple(name for name in FIG3_INPUTS + FIG4_INPUTS if name.endswith("-exa
 def _never_comparisons(data, variant):
     compared = [compare(f"{name} K={k}", gap, detail=f"{gap:+.3f}")
                 for (name, k), gap in init_gaps(data.estimates, FIG3_MODEL, _EXACT, variant).items()]
-    return compared, listing(compared)
+    return listed(compared)
 
 
 def _never_cause(data, variant, grades, compared):

@@ -17,7 +17,7 @@ from dgmm.experiments.report.claims.record import CONVERGENCE, LIKELIHOOD, PerEm
 from dgmm.experiments.report.claims.rules import (EM_HALVES, EM_VARIANTS, FIG3_INPUTS, FIG3_MODEL, HALVES, HIGH_K,
                                                   LONGER_FITS, NOTEBOOK, OWN_CELLS, SCALING, SIGNIFICANT_NAT, TEXT,
                                                   VARIANT_NAMES, VARIANTS, Cause, Claim, Study, by_cause, capital, em,
-                                                  em_switch, graded_share, is_mesh, listing, misses, other_em, pending)
+                                                  em_switch, graded_share, is_mesh, listed, listing, misses, other_em, pending)
 
 _POINTS = tuple(name for name in FIG3_INPUTS if not is_mesh(name))
 _RIVALS = tuple(name for name in FIG3_INPUTS if name != "res4-exact")
@@ -128,7 +128,7 @@ def _fig3_comparisons(data, variant):
             comparison, gap = versus_paper(f"K={k}", ours, value, 2), ours.value - value
             compared.append(replace(comparison, detail=f"{ours:.3f} ± {ours.error:.3f} ({gap:+.3f}, margin "
                                                        f"{comparison.margin + abs(gap):.3f})"))
-    return compared, listing(compared)
+    return listed(compared)
 
 
 def _fig3_cause(data, variant, grades, compared):
@@ -170,7 +170,7 @@ def _ranked(data, variant):
 
 def _ranked_comparisons(data, variant):
     compared = [comparison for comparison, *_ in _ranked(data, variant)]
-    return compared, listing(compared)
+    return listed(compared)
 
 
 def _ranked_cause(data, variant, grades, compared):
@@ -262,7 +262,7 @@ def _fuller_comparisons(data, variant):
     fitted = {(row["input"], row["variant"]) for row in data.convergence or []
               if int(row["K"]) == FIG5_K and row["init"] == "kmeans"}
     if not {("res4-exact", variant), ("res4-centroids", "textbook")} <= fitted:
-        return [], ""
+        return None
     ours, base = (_fig5_fits(data, "res4-exact", variant, "coverage_2sigma"),
                   _fig5_fits(data, "res4-centroids", "textbook", "coverage_2sigma"))
     close = (_fig5_fits(data, "res4-exact", variant, "eval_ll_25")

@@ -97,9 +97,10 @@ def _contrast_comparisons(inputs, data, variant):
         compare(f"{name} vs {other} K={k}", magnitude(gaps[other, k]) - magnitude(gap),
                 detail=f"{gap:+.3f} vs {gaps[other, k]:+.3f}")
         for (name, k), gap in gaps.items() if name in mesh for other in points if (other, k) in gaps]
+    if not compared:
+        return None
     return compared, (f"median |kmeans − random| meshes {_median_gap(gaps, mesh):.3f}, points "
-                      f"{_median_gap(gaps, points):.3f} nat; kmeans − random, mesh vs point input: "
-                      + listing(compared)) if compared else ""
+                      f"{_median_gap(gaps, points):.3f} nat; kmeans − random, mesh vs point input: {listing(compared)}")
 
 
 def _contrast_cause(inputs, data, variant, grades, compared):

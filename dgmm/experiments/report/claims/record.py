@@ -5,14 +5,22 @@ and margin, the quantifier, and the plain functions that make its comparisons an
 The record's functions are module-level functions of the claim's module:
 
 - ``comparisons(data, variant) -> (comparisons, evidence)``: the claim's comparisons on one EM's fits and its
-  evidence line; no comparisons when that EM's fits are missing.
+  evidence line; None when that EM's fits are missing (a pending grade). An empty list is data with nothing to
+  compare: inconclusive.
 - ``cause(data, variant, grades, compared) -> Cause`` of a grade not reproduced. It sees both EMs' grades and
   comparisons (``variant -> list``), so that a cause can be the other EM's result on the same data and starts.
+- ``premise(data, variant) -> Grade or None``: the not-reproduced grade of an EM whose data fails the claim's
+  premise ("given some method in wrong minima"), which no comparison can count; None when the premise holds.
+
+One rule for the sentences: a grade partly or not reproduced gives its cause's sentence, an inconclusive one says the
+data cannot tell (:func:`~.grading.grade_share`), and the cause goes to the evidence either way
+(:func:`~.rules.explained`). A claim no EM has data for waits for the data it ``needs``.
 """
 from dataclasses import dataclass, replace
 
-from dgmm.experiments.report.claims.grading import INCONCLUSIVE, PENDING, REPRODUCED, Quantifier, grade_share
-from dgmm.experiments.report.claims.rules import VARIANT_NAMES, VARIANTS, WORDS, Claim, explained, missing, same
+from dgmm.experiments.report.claims.grading import INCONCLUSIVE, REPRODUCED, Quantifier, grade_share
+from dgmm.experiments.report.claims.rules import (VARIANT_NAMES, VARIANTS, WORDS, Claim, explained, missing, same,
+                                                  waiting)
 
 LIKELIHOOD = "likelihood.csv"
 CONVERGENCE = "convergence.csv"
@@ -56,10 +64,9 @@ class PerEmClaim:
     mesh : bool
         Whether mesh fits enter its comparisons; when not (points are fitted by textbook EM in both), it gets one
         grade in both, textbook EM's.
-    cause_when_inconclusive : bool
-        Whether an inconclusive grade's sentence is the cause (as a likelihood claim's is, where the other EM wins
-        what this one ties) or that the data cannot tell (Table 1's claims); its finding goes to the evidence either
-        way.
+    premise : callable or None
+        ``premise(data, variant)``, the grade of an EM whose data fails the claim's premise (see the module's
+        docstring); None: the claim has none.
     """
 
     name: str
@@ -79,7 +86,7 @@ class PerEmClaim:
     separator: str = "; "
     ours: object = None
     mesh: bool = True
-    cause_when_inconclusive: bool = True
+    premise: object = None
 
     def __post_init__(self):
         """Answer to ``__name__`` and ``__doc__`` as the claims written as functions do (twins and the tests read
@@ -98,26 +105,32 @@ def grade(claim, data):
     grades, lines = _graded_per_em(claim, data)
     if not claim.mesh:
         grades, lines = same(grades["textbook"]), [line.split(": ", 1)[1] for line in lines[-1:]]
-    evidence = claim.evidence.format(lines=claim.separator.join(lines), paper=claim.paper)
+    evidence = (claim.evidence.format(lines=claim.separator.join(lines), paper=claim.paper) if lines
+                else waiting(claim.needs))
     return Claim(claim.section, claim.figure, claim.title, claim.rule, evidence, grades, claim.paper, claim.source)
 
 
 def _graded_per_em(claim, data):
-    """``variant -> Grade``, each not reproduced with its cause's sentence, and the ``"<EM>: <evidence>"`` lines of
-    every EM that had fits, each with its cause's finding."""
-    grades, compared, evidence = {}, {}, {}
+    """``variant -> Grade``, each partly or not reproduced with its cause's sentence, and the ``"<EM>: <evidence>"``
+    lines of every EM that had fits, each with its cause (:func:`~.rules.explained`)."""
+    grades, compared, evidence, unmet = {}, {}, {}, {}
     for variant in VARIANTS:
-        compared[variant], evidence[variant] = claim.comparisons(data, variant)
-        if not compared[variant]:
+        made = claim.comparisons(data, variant)
+        if made is None:
             grades[variant] = missing(claim.needs)
             continue
-        grades[variant] = grade_share(compared[variant], claim.quantifier)
-        if claim.ours is not None:
-            grades[variant] = replace(grades[variant], ours=claim.ours(data, variant, compared[variant]))
-    causes = {variant: claim.cause(data, variant, grades, compared) for variant, grade in grades.items()
-              if grade.verdict not in (REPRODUCED, PENDING)}
-    lines = [f"{VARIANT_NAMES[variant]}: {explained(evidence[variant], causes.get(variant))}" for variant in VARIANTS
-             if compared[variant]]
-    named = {variant for variant in causes if claim.cause_when_inconclusive or grades[variant].verdict != INCONCLUSIVE}
-    return {variant: replace(grade, why=causes[variant].why) if variant in named else grade
-            for variant, grade in grades.items()}, lines
+        compared[variant], evidence[variant] = made
+        unmet[variant] = claim.premise(data, variant) if claim.premise else None
+        grades[variant] = unmet[variant] or _counted(claim, data, variant, compared[variant])
+    causes = {variant: claim.cause(data, variant, grades, compared) for variant in compared
+              if grades[variant].verdict != REPRODUCED and not unmet[variant]}
+    lines = [f"{VARIANT_NAMES[variant]}: {explained(evidence[variant], causes.get(variant), grades[variant].verdict)}"
+             for variant in compared]
+    return {variant: replace(grade, why=causes[variant].why) if variant in causes and grade.verdict != INCONCLUSIVE
+            else grade for variant, grade in grades.items()}, lines
+
+
+def _counted(claim, data, variant, comparisons):
+    """The grade of ``comparisons`` under the claim's quantifier, with its own short number when it has one."""
+    grade = grade_share(comparisons, claim.quantifier)
+    return grade if claim.ours is None else replace(grade, ours=claim.ours(data, variant, comparisons))

@@ -252,7 +252,7 @@ def _fig6_means(data, variant):
     """The Fig 6 means against the notebook's and the evidence line (our means, the comparisons not won)."""
     errors = _errors(data, variant)
     if not errors:
-        return [], ""
+        return None
     comparisons = list(_fig6_comparisons(errors).values())
     return comparisons, _table(errors, np.mean) + unwon(comparisons)
 
@@ -265,8 +265,7 @@ fig6_means_match = PerEmClaim(
           "notebook's"),
     quantifier=PLAIN, comparisons=_fig6_means, cause=_fig6_cause, table=REGISTRATION, needs=WHAT,
     paper="Fig 6's means", source=NOTEBOOK,
-    evidence=f"paper: {_FIG6_PUBLISHED}; ours, mean rotation / translation errors, {{lines}}.", separator=" — ",
-    cause_when_inconclusive=False)
+    evidence=f"paper: {_FIG6_PUBLISHED}; ours, mean rotation / translation errors, {{lines}}.", separator=" — ")
 
 
 TRANSLATION_LIMIT = 1.1
@@ -275,7 +274,9 @@ TRANSLATION_LIMIT = 1.1
 
 def _within_limit(data, variant):
     """Per method, the limit − its mean translation error."""
-    errors = _errors(data, variant) or {}
+    errors = _errors(data, variant)
+    if not errors:
+        return None
     comparisons = [compare(m, Estimate(TRANSLATION_LIMIT) - bootstrap(np.mean, e["trans"]),
                            detail=f"{np.mean(e['trans']):.3g}%") for m, e in errors.items()]
     return comparisons, ", ".join(str(c) for c in comparisons) + unwon(comparisons)
@@ -303,7 +304,7 @@ all_within_model_size = PerEmClaim(
     rule=f"share, every: one method, mean translation error < {TRANSLATION_LIMIT}% (band: bootstrap)",
     quantifier=EVERY, comparisons=_within_limit, cause=_above_limit, table=REGISTRATION, needs=WHAT,
     paper=f"all < {TRANSLATION_LIMIT}%", source=TEXT, evidence="mean translation error, {lines}.", separator=" — ",
-    ours=_worst_translation, cause_when_inconclusive=False)
+    ours=_worst_translation)
 
 
 def _wrong_minima_counts(errors):

@@ -16,7 +16,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from dgmm.experiments.report.claims.grading import LOSS, PENDING, REPRODUCED, TIE, WIN, Grade, Tally, grade_share
+from dgmm.experiments.report.claims.grading import (INCONCLUSIVE, LOSS, NOT, PENDING, REPRODUCED, TIE, WIN, Grade,
+                                                    Tally, grade_share)
 from dgmm.experiments.sweep import SIZED, parse_input
 
 VARIANTS = ("authors", "textbook")
@@ -201,9 +202,14 @@ def per_variant(grade):
     return grades, lines
 
 
+def waiting(what):
+    """The evidence of a claim waiting for data: ``what`` names the missing table or run."""
+    return f"waiting for data: {what}."
+
+
 def pending(section, figure, title, rule, what, paper="", source=WORDS):
     """A claim waiting for data: ``what`` names the missing table or run."""
-    return Claim(section, figure, title, rule, f"waiting for data: {what}.", same(missing(what)), paper, source)
+    return Claim(section, figure, title, rule, waiting(what), same(missing(what)), paper, source)
 
 
 def capital(text):
@@ -281,16 +287,26 @@ OWN_CELLS = "the claim's own cells singled out (a start method, a K, an input), 
 """No switch run for it: the cause is read off the claim's own comparisons."""
 
 
-def explained(evidence, cause):
-    """``evidence`` with the finding behind ``cause`` appended (unchanged when it has none)."""
-    return f"{evidence}; cause: {cause.finding}" if cause is not None and cause.finding else evidence
+def explained(evidence, cause, verdict=NOT):
+    """``evidence`` with ``cause`` appended: its finding; for an ``verdict`` inconclusive, whose sentence says the
+    data cannot tell, its own sentence when it has no finding (unchanged when neither is left to say)."""
+    said = cause and (cause.finding or (verdict == INCONCLUSIVE and clause(cause.why)))
+    return f"{evidence}; cause: {said}" if said else evidence
+
+
+def clause(text):
+    """A cause's sentence as a clause after "cause:": no final stop, no leading "Cause", first letter lower case
+    ("Cause not found: x." → "not found: x")."""
+    text = text.rstrip(".").removeprefix("Cause ")
+    return text[:1].lower() + text[1:]
 
 
 def graded_share(comparisons, quantifier, cause, evidence=""):
-    """``(Grade, evidence)`` of a share rule: ``cause``'s sentence in the grade and its finding in the evidence
-    when the verdict is not reproduced."""
+    """``(Grade, evidence)`` of a share rule: ``cause``'s sentence in the grade when partly or not reproduced (an
+    inconclusive grade says the data cannot tell), and the cause in the evidence when not reproduced
+    (:func:`explained`)."""
     grade = grade_share(comparisons, quantifier, cause.why)
-    return grade, evidence if grade.verdict == REPRODUCED else explained(evidence, cause)
+    return grade, evidence if grade.verdict == REPRODUCED else explained(evidence, cause, grade.verdict)
 
 
 def misses(comparisons):
@@ -363,6 +379,12 @@ def switch_or_not_found(finding, variant, grades, compared):
 
 SPELLED = 14
 """A share's evidence spells out every comparison up to this many (beyond it, the tied and lost ones)."""
+
+
+def listed(comparisons):
+    """``(comparisons, their listing)`` of a record's comparisons (:mod:`~.record`); None when there are none: the
+    fits they need are missing."""
+    return (comparisons, listing(comparisons)) if comparisons else None
 
 
 def listing(comparisons, spelled=SPELLED):
