@@ -11,8 +11,8 @@ from dgmm.experiments.report.claims.grading import EVERY, LOSS, PLAIN, TIE, WIN,
 from dgmm.experiments.report.claims.inits import cells, median, still_climbing, versus_rivals
 from dgmm.experiments.report.claims.record import CONVERGENCE, LIKELIHOOD, PerEmClaim
 from dgmm.experiments.report.claims.rules import (FIG3_INPUTS, FIG3_MODEL, LONGER_FITS, TEXT, Cause, Claim, by_cause,
-                                                  em, em_switch, graded_share, is_mesh, listed, listing, misses, pending,
-                                                  same, switch_or_not_found)
+                                                  em, em_switch, graded_share, is_mesh, listed, listing, misses,
+                                                  pending, same, switch_or_not_found)
 
 CONVERGED = "n_iter_within_0.01"
 """Iterations the bound took to come within 0.01 nat of its value after 100 (convergence.csv)."""

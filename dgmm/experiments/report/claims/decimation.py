@@ -13,8 +13,8 @@ from dgmm.experiments.report.claims.grading import EVERY, LOSS, OFTEN_WORDS, PLA
 from dgmm.experiments.report.claims.inits import (cells, init_contrast, init_gaps, prefer_an_init, still_climbing,
                                                   versus_rivals)
 from dgmm.experiments.report.claims.record import LIKELIHOOD, PerEmClaim
-from dgmm.experiments.report.claims.rules import (FIG3_INPUTS, FIG3_MODEL, FIG4_INPUTS, HIGH_K, LONGER_FITS,
-                                                  OWN_CELLS, Cause, Claim, em, graded_share, is_mesh, listed, listing, misses,
+from dgmm.experiments.report.claims.rules import (FIG3_INPUTS, FIG3_MODEL, FIG4_INPUTS, HIGH_K, LONGER_FITS, OWN_CELLS,
+                                                  Cause, Claim, em, graded_share, is_mesh, listed, listing, misses,
                                                   missing, pending, same, switch_or_not_found)
 from dgmm.experiments.report.claims.timings import timing_claim
 from dgmm.experiments.report.tables import STORED_MAX_ITER

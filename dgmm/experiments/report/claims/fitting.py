@@ -17,7 +17,7 @@ from dgmm.experiments.report.claims.record import CONVERGENCE, LIKELIHOOD, PerEm
 from dgmm.experiments.report.claims.rules import (EM_HALVES, EM_VARIANTS, FIG3_INPUTS, FIG3_MODEL, HALVES, HIGH_K,
                                                   LONGER_FITS, NOTEBOOK, OWN_CELLS, SCALING, SIGNIFICANT_NAT, TEXT,
                                                   VARIANT_NAMES, VARIANTS, Cause, Claim, Study, by_cause, capital, em,
-                                                  em_switch, graded_share, is_mesh, listed, listing, misses, other_em, pending)
+                                                  em_switch, graded_share, is_mesh, listed, misses, other_em, pending)
 
 _POINTS = tuple(name for name in FIG3_INPUTS if not is_mesh(name))
 _RIVALS = tuple(name for name in FIG3_INPUTS if name != "res4-exact")

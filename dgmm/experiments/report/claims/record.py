@@ -25,7 +25,9 @@ from dgmm.experiments.report.claims.rules import (VARIANT_NAMES, VARIANTS, WORDS
 LIKELIHOOD = "likelihood.csv"
 CONVERGENCE = "convergence.csv"
 REGISTRATION = "registration.csv"
-"""The sweep's tables the records read (:attr:`PerEmClaim.table`)."""
+OPTIMISER_CHECK = "optimisers.csv"
+IDENTITY_CHECK = "identities.csv"
+"""The sweep's and the checks' tables the records read (:attr:`PerEmClaim.table`)."""
 
 
 @dataclass(frozen=True)
@@ -45,8 +47,8 @@ class PerEmClaim:
     comparisons, cause : callable
         The module-level functions that make its comparisons and its cause (see the module's docstring).
     table : str
-        The sweep's table it reads (:data:`LIKELIHOOD`, :data:`CONVERGENCE`, :data:`REGISTRATION`); its causes name
-        the switch experiments they read (:attr:`~.rules.Cause.switch`).
+        The table it reads (:data:`LIKELIHOOD`, :data:`CONVERGENCE`, :data:`REGISTRATION`, ...); its causes name the
+        switch experiments they read (:attr:`~.rules.Cause.switch`).
     needs : str
         The fits or trials it needs, for a pending grade.
     paper : str
