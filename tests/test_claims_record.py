@@ -1,11 +1,11 @@
 """The claim record and its grader (dgmm.experiments.report.claims.record) on hand-made comparisons: one rule for an
 inconclusive grade's sentence and its cause, one evidence for a claim waiting for data, an EM with data but nothing
-to compare, and a premise that fails."""
+to compare, a premise that fails, and a twin on another view of the tables."""
 from functools import partial
 
 from dgmm.experiments.report.claims.grading import EVERY, NOT, PLAIN, Grade, compare
 from dgmm.experiments.report.claims.measurements import Measurements
-from dgmm.experiments.report.claims.record import LIKELIHOOD, PerEmClaim
+from dgmm.experiments.report.claims.record import LIKELIHOOD, PerEmClaim, twin
 from dgmm.experiments.report.claims.rules import Cause
 
 MARGINS = {"authors": (1.0, 0.0), "textbook": (1.0, -1.0)}
@@ -71,3 +71,14 @@ def test_a_premise_that_fails_is_not_reproduced_with_its_own_sentence_and_no_cau
     claim = record(premise=lambda data, variant: unmet if variant == "textbook" else None)(Measurements())
     assert claim.grades["textbook"] == unmet and claim.grades["authors"].verdict == "reproduced"
     assert claim.evidence == "authors' EM: authors numbers; textbook EM: textbook numbers."
+
+
+def test_a_twin_grades_the_same_rule_on_its_view_and_waits_for_what_the_view_lacks():
+    base = record()
+    twin_claim = twin(base, "at_100", "another view", view=lambda data: data.at_iterations(100),
+                      waits=lambda view: None if view.max_iter == 100 else "fits at 100 iterations")
+    assert twin_claim.__name__ == "made_up_at_100" and twin_claim.__wrapped__ is base
+    graded = twin_claim(Measurements())
+    assert graded.title == "A made-up claim (another view)" and graded.grades == base(Measurements()).grades
+    waiting = twin(base, "x", "y", view=lambda data: data, waits=lambda view: "fits at 100 iterations")
+    assert waiting(Measurements()).evidence == "waiting for data: fits at 100 iterations."

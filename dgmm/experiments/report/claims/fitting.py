@@ -240,10 +240,9 @@ mesh_handles_both_inits = init_contrast(
     PLAIN, "handled both")
 
 
-def points_prefer_an_init(data):
-    """§IV-A: "the point-based methods often had a preferred initialization"."""
-    return prefer_an_init(data, ("§IV-A", "Fig 3", "Point inputs (centroids, vertices) often have a preferred "
-                                 "initialisation"), _POINTS, False, "often")
+points_prefer_an_init = prefer_an_init(
+    "points_prefer_an_init", '§IV-A: "the point-based methods often had a preferred initialization".', "§IV-A",
+    "Fig 3", "Point inputs (centroids, vertices) often have a preferred initialisation", _POINTS, False, "often")
 
 
 FIG5_K = 100

@@ -12,6 +12,10 @@ The record's functions are module-level functions of the claim's module:
 - ``premise(data, variant) -> Grade or None``: the not-reproduced grade of an EM whose data fails the claim's
   premise ("given some method in wrong minima"), which no comparison can count; None when the premise holds.
 
+A twin of a record (:func:`twin`) grades the same rule on another view of the tables (Fig 4 at the authors' 100
+iterations, the odometry at the authors' protocol): ``view(data) -> Measurements`` and ``waits(view) -> str or
+None``, what the whole claim waits for on that view before either EM's fits (None: nothing).
+
 One rule for the sentences: a grade partly or not reproduced gives its cause's sentence, an inconclusive one says the
 data cannot tell (:func:`~.grading.grade_share`), and the cause goes to the evidence either way
 (:func:`~.rules.explained`). A claim no EM has data for waits for the data it ``needs``.
@@ -19,8 +23,8 @@ data cannot tell (:func:`~.grading.grade_share`), and the cause goes to the evid
 from dataclasses import dataclass, replace
 
 from dgmm.experiments.report.claims.grading import INCONCLUSIVE, REPRODUCED, Quantifier, grade_share
-from dgmm.experiments.report.claims.rules import (VARIANT_NAMES, VARIANTS, WORDS, Claim, explained, missing, same,
-                                                  waiting)
+from dgmm.experiments.report.claims.rules import (VARIANT_NAMES, VARIANTS, WORDS, Claim, explained, missing, pending,
+                                                  same, waiting)
 
 LIKELIHOOD = "likelihood.csv"
 CONVERGENCE = "convergence.csv"
@@ -69,6 +73,11 @@ class PerEmClaim:
     premise : callable or None
         ``premise(data, variant)``, the grade of an EM whose data fails the claim's premise (see the module's
         docstring); None: the claim has none.
+    view, waits : callable or None
+        A twin's view of the tables and what it waits for on it (see the module's docstring); None: the tables as
+        given, waiting for nothing beyond each EM's fits.
+    twin_of : PerEmClaim or None
+        The record a twin grades on another view (its ``__wrapped__``, as :func:`~.claims.evaluate` reads it).
     """
 
     name: str
@@ -89,12 +98,17 @@ class PerEmClaim:
     ours: object = None
     mesh: bool = True
     premise: object = None
+    view: object = None
+    waits: object = None
+    twin_of: object = None
 
     def __post_init__(self):
         """Answer to ``__name__`` and ``__doc__`` as the claims written as functions do (twins and the tests read
         them)."""
         object.__setattr__(self, "__name__", self.name)
         object.__setattr__(self, "__doc__", self.words)
+        if self.twin_of is not None:
+            object.__setattr__(self, "__wrapped__", self.twin_of)
 
     def __call__(self, data):
         return grade(self, data)
@@ -103,13 +117,24 @@ class PerEmClaim:
 def grade(claim, data):
     """The :class:`~.rules.Claim` of a :class:`PerEmClaim` on ``data``: each EM's comparisons counted under its
     quantifier, each grade not reproduced with its cause's sentence, and its evidence lines with the causes'
-    findings."""
+    findings; a twin grades its view, pending while the view lacks what it waits for."""
+    data = claim.view(data) if claim.view else data
+    waited = claim.waits(data) if claim.waits else None
+    if waited:
+        return pending(claim.section, claim.figure, claim.title, claim.rule, waited, claim.paper, claim.source)
     grades, lines = _graded_per_em(claim, data)
     if not claim.mesh:
         grades, lines = same(grades["textbook"]), [line.split(": ", 1)[1] for line in lines[-1:]]
     evidence = (claim.evidence.format(lines=claim.separator.join(lines), paper=claim.paper) if lines
                 else waiting(claim.needs))
     return Claim(claim.section, claim.figure, claim.title, claim.rule, evidence, grades, claim.paper, claim.source)
+
+
+def twin(claim, suffix, title, view, waits):
+    """``claim`` graded on another view of the tables: named with ``suffix``, its title followed by ``title`` in
+    brackets."""
+    return replace(claim, name=f"{claim.name}_{suffix}", title=f"{claim.title} ({title})", view=view, waits=waits,
+                   twin_of=claim)
 
 
 def _graded_per_em(claim, data):
