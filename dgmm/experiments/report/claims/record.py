@@ -31,6 +31,7 @@ CONVERGENCE = "convergence.csv"
 REGISTRATION = "registration.csv"
 OPTIMISER_CHECK = "optimisers.csv"
 IDENTITY_CHECK = "identities.csv"
+RESAMPLING_CHECK = "resampling.csv"
 """The sweep's and the checks' tables the records read (:attr:`PerEmClaim.table`)."""
 
 
