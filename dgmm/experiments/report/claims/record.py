@@ -32,6 +32,7 @@ REGISTRATION = "registration.csv"
 OPTIMISER_CHECK = "optimisers.csv"
 IDENTITY_CHECK = "identities.csv"
 RESAMPLING_CHECK = "resampling.csv"
+ODOMETRY = "odometry.csv"
 """The sweep's and the checks' tables the records read (:attr:`PerEmClaim.table`)."""
 
 
@@ -55,14 +56,15 @@ class PerEmClaim:
         The table it reads (:data:`LIKELIHOOD`, :data:`CONVERGENCE`, :data:`REGISTRATION`, ...); its causes name the
         switch experiments they read (:attr:`~.rules.Cause.switch`).
     needs : str
-        The fits or trials it needs, for a pending grade.
+        The fits or trials it needs, for a pending grade; ``{em}`` stands for the EM's name (each EM's where the
+        claim waits as a whole).
     paper : str
         The paper's number or words the deciding number stands beside.
     source : str
         Where ``paper`` comes from (:data:`~.rules.TEXT`, :data:`~.rules.NOTEBOOK`, :data:`~.rules.WORDS`).
     evidence : str
         Template of the evidence: ``{lines}`` the EMs' evidence lines joined by ``separator``, ``{paper}`` the
-        paper's value.
+        paper's value, and the fields of ``context``.
     separator : str
         What joins the EMs' evidence lines.
     ours : callable or None
@@ -74,6 +76,9 @@ class PerEmClaim:
     premise : callable or None
         ``premise(data, variant)``, the grade of an EM whose data fails the claim's premise (see the module's
         docstring); None: the claim has none.
+    context : callable or None
+        ``context(data) -> dict``: fields of the evidence that the tables give, beside the EMs' lines (what the tie
+        bands rest on, what is missing); None: none.
     view, waits : callable or None
         A twin's view of the tables and what it waits for on it (see the module's docstring); None: the tables as
         given, waiting for nothing beyond each EM's fits.
@@ -99,6 +104,7 @@ class PerEmClaim:
     ours: object = None
     mesh: bool = True
     premise: object = None
+    context: object = None
     view: object = None
     waits: object = None
     twin_of: object = None
@@ -126,8 +132,9 @@ def grade(claim, data):
     grades, lines = _graded_per_em(claim, data)
     if not claim.mesh:
         grades, lines = same(grades["textbook"]), [line.split(": ", 1)[1] for line in lines[-1:]]
-    evidence = (claim.evidence.format(lines=claim.separator.join(lines), paper=claim.paper) if lines
-                else waiting(claim.needs))
+    fields = claim.context(data) if claim.context else {}
+    evidence = (claim.evidence.format(lines=claim.separator.join(lines), paper=claim.paper, **fields) if lines
+                else waiting(claim.needs.format(em="each EM")))
     return Claim(claim.section, claim.figure, claim.title, claim.rule, evidence, grades, claim.paper, claim.source)
 
 
@@ -145,7 +152,7 @@ def _graded_per_em(claim, data):
     for variant in VARIANTS:
         made = claim.comparisons(data, variant)
         if made is None:
-            grades[variant] = missing(claim.needs)
+            grades[variant] = missing(claim.needs.format(em=VARIANT_NAMES[variant]))
             continue
         compared[variant], evidence[variant] = made
         unmet[variant] = claim.premise(data, variant) if claim.premise else None
