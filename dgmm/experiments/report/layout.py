@@ -131,7 +131,7 @@ def grading_rules():
         f"**verdicts**: {', '.join(VERDICT_ORDER)} (a table the claim needs is missing); inconclusive and within "
         "timing noise are no verdict: the data cannot tell, a rerun could tell it either way. Not reproduced names its "
         "measured cause (an experiment that switches it and moves the verdict) or \"cause not found\" and what was "
-        "tried.",
+        "tried; an inconclusive claim's cause, when one was looked for, is in its evidence.",
         f"**paper values**: the paper's text, or {SOURCE_MARKS[NOTEBOOK]} the authors' notebooks (not in the text; "
         "the figure is an image).",
     ]

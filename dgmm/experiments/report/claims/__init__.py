@@ -1,12 +1,16 @@
 """The paper's claims, one entry each, grouped by the paper's sections; each grades its claim with both EMs when
 called on the :class:`Measurements`: a :class:`~.record.PerEmClaim` record (a share rule on each EM's fits, graded
-by :func:`~.record.grade`) or a function.
+by :func:`~.record.grade`), a :class:`~.timings.TimingClaim` record (a time ratio of the timing check, graded by
+:func:`~.timings.grade_timing`), or, for the two whose rule the records do not hold, a function
+(:func:`~.theory.triangle_equals_points`, whose rule states the draws and noise of its table, and
+:func:`~.registration.bfgs_faster_than_cg`, a time ratio of the optimisers check's trials).
 
 Modules: :mod:`~.theory` (§II, §III, §V-A, §VII: Fig 2 and the identities), :mod:`~.fitting` (§IV-A, Fig 3,
 Fig 5), :mod:`~.decimation` (§IV-B, §IV-C, Fig 4), :mod:`~.convergence` (§I, §IV-C, §VII), :mod:`~.registration`
 (§VI-A, §VI-B, Fig 6), :mod:`~.table1` (§VI-C, Table 1), :mod:`~.odometry` (§VI-D, Fig 7). The rule kinds and
 verdicts are in :mod:`~.grading`; what a graded claim holds, its causes and the EM policy in :mod:`~.rules`; the
-claim record and its grader in :mod:`~.record`; what the claims read in :mod:`~.measurements`.
+claim record and its grader in :mod:`~.record` (the timing record in :mod:`~.timings`); what the claims read in
+:mod:`~.measurements`.
 """
 from dataclasses import replace
 

@@ -6,28 +6,25 @@ Each claim that reads Fig 4's fits is graded twice (:func:`at_stored_iterations`
 (25 iterations, §IV), and on Fig 4 run as the authors' stored data was (up to 100 iterations; config experiment
 fig4_100), listed right after it.
 """
-from dataclasses import replace
 from functools import partial
 
 from dgmm.experiments.report.claims.grading import EVERY, LOSS, OFTEN_WORDS, PLAIN, WIN, compare, estimate
 from dgmm.experiments.report.claims.inits import (cells, init_contrast, init_gaps, prefer_an_init, still_climbing,
                                                   versus_rivals)
-from dgmm.experiments.report.claims.record import LIKELIHOOD, PerEmClaim
-from dgmm.experiments.report.claims.rules import (FIG3_INPUTS, FIG3_MODEL, FIG4_INPUTS, HIGH_K, LONGER_FITS,
-                                                  OWN_CELLS, Cause, Claim, em, graded_share, is_mesh, listing, misses,
-                                                  missing, pending, same, switch_or_not_found)
-from dgmm.experiments.report.claims.timings import timing_claim
+from dgmm.experiments.report.claims.record import LIKELIHOOD, PerEmClaim, twin
+from dgmm.experiments.report.claims.rules import (FIG3_INPUTS, FIG3_MODEL, FIG4_INPUTS, HIGH_K, LONGER_FITS, OWN_CELLS,
+                                                  Cause, em, is_mesh, listed, listing, misses, switch_or_not_found)
+from dgmm.experiments.report.claims.timings import TimingClaim
 from dgmm.experiments.report.tables import STORED_MAX_ITER
 
 POISSON, RANDOM = "poisson1000-points", "random1000-points"
 QUADRIC, CLUSTERING = "quadric1000-exact", "clustering1000-exact"
 
 
-def clustering_is_fast(data):
-    """§IV-B: "we try two methods, clustering decimation, which is fast, and quadric error decimation, which is more
-    accurate"."""
-    return timing_claim(data, "§IV-B", "", "Clustering decimation is fast (faster than quadric decimation)",
-                        "decimation", ("clustering", "quadric"), (0.0, 1.0), "fast")
+clustering_is_fast = TimingClaim(
+    "clustering_is_fast", '§IV-B: "we try two methods, clustering decimation, which is fast, and quadric error '
+    'decimation, which is more accurate".', "§IV-B", "", "Clustering decimation is fast (faster than quadric "
+    "decimation)", "decimation", ("clustering", "quadric"), (0.0, 1.0), "fast")
 
 
 def pairwise(name, words, title, winner, loser, paper_words):
@@ -44,7 +41,7 @@ def _pairwise_comparisons(winner, loser, data, variant):
     compared = [compare(f"{init} K={k}", cell[winner] - cell[loser], detail=f"{cell[winner]:.3f} vs {cell[loser]:.3f}")
                 for (init, k), cell in cells(data.estimates, FIG3_MODEL, FIG4_INPUTS, variant).items()
                 if {winner, loser} <= cell.keys()]
-    return compared, listing(compared)
+    return listed(compared)
 
 
 def _pairwise_cause(winner, loser, data, variant, grades, compared):
@@ -66,11 +63,10 @@ quadric_beats_clustering = pairwise(
     "more accurate")
 
 
-def random_sampling_is_fast(data):
-    """§IV-B: "we both randomly sample points on the surface on the mesh, and use Poisson Disc sampling [...]. As
-    before, the first is faster while the latter produces better results"."""
-    return timing_claim(data, "§IV-B", "", "Random sampling is faster than Poisson-disk sampling", "sampling",
-                        ("random", "poisson"), (0.0, 1.0), "faster")
+random_sampling_is_fast = TimingClaim(
+    "random_sampling_is_fast", '§IV-B: "we both randomly sample points on the surface on the mesh, and use Poisson '
+    'Disc sampling [...]. As before, the first is faster while the latter produces better results".', "§IV-B", "",
+    "Random sampling is faster than Poisson-disk sampling", "sampling", ("random", "poisson"), (0.0, 1.0), "faster")
 
 
 poisson_beats_random = pairwise(
@@ -84,11 +80,10 @@ mesh_invariant_to_init = init_contrast(
     "largely invariant")
 
 
-def points_prefer_kmeans(data):
-    """§IV-B: "the point-based strategies often prefer k-means initialization (exceptions discussed in
-    Sec. IV-C)"."""
-    return prefer_an_init(data, ("§IV-B", "Fig 4", "Point samples often prefer k-means initialisation"),
-                          (POISSON, RANDOM), True, "often")
+points_prefer_kmeans = prefer_an_init(
+    "points_prefer_kmeans", '§IV-B: "the point-based strategies often prefer k-means initialization (exceptions '
+    'discussed in Sec. IV-C)".', "§IV-B", "Fig 4", "Point samples often prefer k-means initialisation",
+    (POISSON, RANDOM), True, "often")
 
 
 def _often_best_comparisons(data, variant):
@@ -101,7 +96,7 @@ def _often_best_comparisons(data, variant):
                   for name, value in cell.items() if (name, init) != (POISSON, "kmeans")}
         compared.append(versus_rivals(f"K={k}", ours, rivals,
                                       lambda rival, value: f"{ours:.3f} vs {rival} {value:.3f}")[1])
-    return compared, listing(compared)
+    return listed(compared)
 
 
 def _often_best_cause(data, variant, grades, compared):
@@ -132,7 +127,7 @@ def _lowest_comparisons(data, variant):
                         detail=f"{cell[name]:.3f} vs {cell[RANDOM]:.3f}")
                 for (init, k), cell in cells(data.estimates, FIG3_MODEL, FIG4_INPUTS, variant).items()
                 if RANDOM in cell for name in FIG4_INPUTS if name in cell and name != RANDOM]
-    return compared, listing(compared)
+    return listed(compared)
 
 
 def _lowest_cause(data, variant, grades, compared):
@@ -165,8 +160,9 @@ def _reliable_comparisons(data, variant):
     table = cells(data.estimates, FIG3_MODEL, FIG4_INPUTS, variant)
     compared = _steps(table, [name for name in FIG4_INPUTS if is_mesh(name)])
     falls = [c for c in _steps(table, [n for n in FIG4_INPUTS if not is_mesh(n)]) if c.outcome == LOSS]
-    return compared, (f"{listing(compared)}; point inputs fall in {len(falls)} steps "
-                      f"({'; '.join(map(str, falls))})") if compared else ""
+    if not compared:
+        return None
+    return compared, f"{listing(compared)}; point inputs fall in {len(falls)} steps ({'; '.join(map(str, falls))})"
 
 
 def _reliable_cause(data, variant, grades, compared):
@@ -184,40 +180,58 @@ mesh_reliable = PerEmClaim(
     needs="Fig 4 mesh fits at more than one K in likelihood.csv", paper="reliable across all tests")
 
 
-def random_points_prefer_random(data):
-    """§IV-C: "One surprising result in Figures 3 and 4 was that random sampled points performed better with random
-    initialization than k-means initialization (at high mixture numbers)"."""
-    args = ("§IV-C", "Fig 4", f"At high K (≥ {HIGH_K}) random samples fit better from random starts")
-    rule = f"share, plain: one K ≥ {HIGH_K}, random − kmeans > 0 on the random samples"
-    every_k = {k: -gap for (_, k), gap in init_gaps(data.estimates, FIG3_MODEL, (RANDOM,), "textbook").items()}
-    gaps = {k: gap for k, gap in every_k.items() if k >= HIGH_K}
-    lower = ", ".join(f"K={k} {gap:+.3f} ± {gap.band:.3f}" for k, gap in every_k.items() if k < HIGH_K)
-    if not gaps:
-        return pending(*args, rule, f"random-sample fits at K ≥ {HIGH_K} from both starts", "random better")
-    compared = {k: compare(f"K={k}", gap, detail=f"{gap:+.3f}") for k, gap in gaps.items()}
-    rows = [row for row in data.likelihood if row["input"] == RANDOM and int(row["K"]) >= HIGH_K]
+def _high_k_gaps(data):
+    """``K -> random − kmeans`` (an Estimate) of the random samples (textbook EM in both)."""
+    return {k: -gap for (_, k), gap in init_gaps(data.estimates, FIG3_MODEL, (RANDOM,), "textbook").items()}
+
+
+def _high_k_rows(data):
+    """likelihood.csv's fits of the random samples at K ≥ :data:`~.rules.HIGH_K`."""
+    return [row for row in data.likelihood or [] if row["input"] == RANDOM and int(row["K"]) >= HIGH_K]
+
+
+def _random_better(data, variant):
+    """Per K ≥ HIGH_K, the random samples' random − kmeans; the evidence adds how many fits ran every iteration,
+    the gaps below HIGH_K and Fig 3's vertices at high K."""
+    every_k = _high_k_gaps(data)
+    compared = [compare(f"K={k}", gap, detail=f"{gap:+.3f}") for k, gap in every_k.items() if k >= HIGH_K]
+    if not compared:
+        return None
+    rows = _high_k_rows(data)
     ran = sum(int(row["n_iter"]) >= data.max_iter for row in rows)
-    lost = [k for k, comparison in compared.items() if comparison.outcome != WIN]
-    cause = Cause("")
-    if lost:
-        k = lost[0]
-        overfit = estimate([float(row["bound"]) - float(row["eval_ll"]) for row in rows
-                            if int(row["K"]) == k and row["init"] == "kmeans"])
-        cause = Cause(f"Random starts still climb at iteration {data.max_iter}: at K={k} the collapsing k-means "
-                      "starts still end above them.",
-                      f"k-means-started fits of the 1000 random samples collapse as K grows (their training bound "
-                      f"{overfit:.2f} nat above their evaluation log-likelihood at K={k}) but at K={k} still end above "
-                      f"the random starts ({compared[k]}), which are still climbing at iteration {data.max_iter} "
-                      f"({still_climbing(data, 'textbook')})", LONGER_FITS)
+    lower = ", ".join(f"K={k} {gap:+.3f} ± {gap.band:.3f}" for k, gap in every_k.items() if k < HIGH_K)
     vertices = [f"K={k} {-gap:+.3f}" for (_, k), gap in init_gaps(data.estimates, FIG3_MODEL, ("res4-vertices",),
                                                                     "textbook").items() if k >= HIGH_K]
-    grade, evidence = graded_share(compared.values(), PLAIN, cause, (
-        f"random − kmeans: {listing(list(compared.values()))}; {ran} of these {len(rows)} fits ran all "
-        f"{data.max_iter} iterations, "
+    return compared, (
+        f"random − kmeans: {listing(compared)}; {ran} of these {len(rows)} fits ran all {data.max_iter} iterations, "
         "so the Discussion's suspected early exit is not it"
         + (f"; where \"high\" starts is our reading: below K={HIGH_K}, random − kmeans {lower}" if lower else "")
-        + (f"; Fig 3's res4 vertices, random − kmeans: {', '.join(vertices)}" if vertices else "")))
-    return Claim(*args, rule, f"{evidence}. Point fits are the same for both EMs.", same(grade), "random better")
+        + (f"; Fig 3's res4 vertices, random − kmeans: {', '.join(vertices)}" if vertices else ""))
+
+
+def _collapse_above_random(data, variant, grades, compared):
+    """At the first K not won, the k-means starts' collapse (their training bound above their evaluation) still
+    ending above the random starts, which are still climbing."""
+    lost = next(c for c in compared[variant] if c.outcome != WIN)
+    k = int(lost.label.removeprefix("K="))
+    overfit = estimate([float(row["bound"]) - float(row["eval_ll"]) for row in _high_k_rows(data)
+                        if int(row["K"]) == k and row["init"] == "kmeans"])
+    return Cause(f"Random starts still climb at iteration {data.max_iter}: at K={k} the collapsing k-means starts "
+                 "still end above them.",
+                 f"k-means-started fits of the 1000 random samples collapse as K grows (their training bound "
+                 f"{overfit:.2f} nat above their evaluation log-likelihood at K={k}) but at K={k} still end above the "
+                 f"random starts ({lost}), which are still climbing at iteration {data.max_iter} "
+                 f"({still_climbing(data, 'textbook')})", LONGER_FITS)
+
+
+random_points_prefer_random = PerEmClaim(
+    "random_points_prefer_random", '§IV-C: "One surprising result in Figures 3 and 4 was that random sampled points '
+    'performed better with random initialization than k-means initialization (at high mixture numbers)".',
+    "§IV-C", "Fig 4", f"At high K (≥ {HIGH_K}) random samples fit better from random starts",
+    rule=f"share, plain: one K ≥ {HIGH_K}, random − kmeans > 0 on the random samples",
+    quantifier=PLAIN, comparisons=_random_better, cause=_collapse_above_random, table=LIKELIHOOD,
+    needs=f"random-sample fits at K ≥ {HIGH_K} from both starts", paper="random better",
+    evidence="{lines}. Point fits are the same for both EMs.", mesh=False)
 
 
 _EXACT = tuple(name for name in FIG3_INPUTS + FIG4_INPUTS if name.endswith("-exact"))
@@ -226,7 +240,7 @@ _EXACT = tuple(name for name in FIG3_INPUTS + FIG4_INPUTS if name.endswith("-exa
 def _never_comparisons(data, variant):
     compared = [compare(f"{name} K={k}", gap, detail=f"{gap:+.3f}")
                 for (name, k), gap in init_gaps(data.estimates, FIG3_MODEL, _EXACT, variant).items()]
-    return compared, listing(compared)
+    return listed(compared)
 
 
 def _never_cause(data, variant, grades, compared):
@@ -250,25 +264,21 @@ STORED_PROTOCOL_NEEDS = (f"Fig 4's fits at max_iter {STORED_MAX_ITER} in likelih
                          f"fit.experiments.fig4_100, Fig 4's with max_iter: {STORED_MAX_ITER})")
 
 
+def _stored_view(data):
+    """Fig 4 as the authors' stored data ran it: the fits capped at ``STORED_MAX_ITER`` iterations (Fig 4's; a claim
+    that also reads Fig 3's cells reads Fig 4's alone)."""
+    return data.at_iterations(STORED_MAX_ITER)
+
+
+def _stored_fits_missing(view):
+    """What the view waits for while likelihood.csv has no Fig 4 fits at that cap."""
+    return None if any(row["input"] in FIG4_INPUTS for row in view.likelihood or []) else STORED_PROTOCOL_NEEDS
+
+
 def at_stored_iterations(claim):
-    """``claim`` graded on Fig 4 as the authors' stored data ran it: on :meth:`Measurements.at_iterations`
-    (``STORED_MAX_ITER``), whose likelihood cells are only the fits capped at 100 iterations (Fig 4's; a claim that
-    also reads Fig 3's cells reads Fig 4's alone), titled with ``STORED_PROTOCOL``; pending, naming the config it
-    needs, while likelihood.csv has no Fig 4 fits at that cap."""
-
-    def graded(data):
-        view = data.at_iterations(STORED_MAX_ITER)
-        result = claim(view)
-        result = replace(result, title=f"{result.title} ({STORED_PROTOCOL})")
-        if any(row["input"] in FIG4_INPUTS for row in view.likelihood or []):
-            return result
-        return replace(result, evidence=f"waiting for data: {STORED_PROTOCOL_NEEDS}.",
-                       grades=same(missing(STORED_PROTOCOL_NEEDS)))
-
-    graded.__name__ = graded.__qualname__ = f"{claim.__name__}_at_{STORED_MAX_ITER}"
-    graded.__wrapped__ = claim
-    graded.__doc__ = f"{claim.__doc__}\n\n    Graded on {STORED_PROTOCOL} (:func:`at_stored_iterations`)."
-    return graded
+    """``claim`` graded on Fig 4 as the authors' stored data ran it (:func:`~.record.twin`), titled with
+    ``STORED_PROTOCOL``."""
+    return twin(claim, f"at_{STORED_MAX_ITER}", STORED_PROTOCOL, _stored_view, _stored_fits_missing)
 
 
 FIG4_CLAIMS = (quadric_beats_clustering, poisson_beats_random, mesh_invariant_to_init, points_prefer_kmeans,

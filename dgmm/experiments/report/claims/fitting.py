@@ -16,8 +16,8 @@ from dgmm.experiments.report.claims.inits import cells, init_contrast, prefer_an
 from dgmm.experiments.report.claims.record import CONVERGENCE, LIKELIHOOD, PerEmClaim
 from dgmm.experiments.report.claims.rules import (EM_HALVES, EM_VARIANTS, FIG3_INPUTS, FIG3_MODEL, HALVES, HIGH_K,
                                                   LONGER_FITS, NOTEBOOK, OWN_CELLS, SCALING, SIGNIFICANT_NAT, TEXT,
-                                                  VARIANT_NAMES, VARIANTS, Cause, Claim, Study, by_cause, capital, em,
-                                                  em_switch, graded_share, is_mesh, listing, misses, other_em, pending)
+                                                  VARIANTS, Cause, Study, by_cause, capital, em, em_switch, is_mesh,
+                                                  listed, misses, other_em)
 
 _POINTS = tuple(name for name in FIG3_INPUTS if not is_mesh(name))
 _RIVALS = tuple(name for name in FIG3_INPUTS if name != "res4-exact")
@@ -30,31 +30,39 @@ _TOLERANCE_RULE = ("the tolerance rule: EM stops once the bound changes by less 
                    "GaussianMixture has no other early stop), which a fit at a fixed point reaches before iteration 25")
 
 
-def no_early_exit(data):
-    """§IV: "We run 25 iterations of EM for all methods, with a tight tolerance (ε=10⁻¹²) to prevent an early exit
-    from the optimization": a statement of the protocol, not a finding. A fit that stops before iteration 25 has met
-    the tolerance at a fixed point (our EM stops no other way), where more iterations give the same mixture; the
-    authors' own Fig 3 fits stopped early too (their stored mean iterations, authors.csv's n_iter, fall below 25 in
-    some cells). So the rule asks that every fit ran the protocol, and the early exits are the evidence."""
-    args = ("§IV", "", "Every fit runs the paper's protocol: 25 iterations, ε = 10⁻¹² (an exit only at a fixed point)")
-    rule = (f"share, every: one fit of likelihood.csv, at most {PAPER_ITERATIONS} iterations (the protocol; fewer "
-            "only where the ε tolerance met a fixed point)")
-    if not data.likelihood:
-        return pending(*args, rule, "likelihood.csv", "25 iterations, ε = 10⁻¹²", TEXT)
-    grades, lines = {}, []
-    for variant in VARIANTS:
-        rows = [row for row in data.likelihood if row["variant"] == variant]
-        comparisons = [compare(f"{row['input']} {row['init']} K={row['K']} seed {row['seed']}",
-                               PAPER_ITERATIONS + 0.5 - int(row["n_iter"])) for row in rows]
-        short = [row for row in rows if int(row["n_iter"]) < PAPER_ITERATIONS]
-        cause = _early_exit_cause(short, data.likelihood)
-        grades[variant], evidence = graded_share(comparisons, EVERY, Cause("Some fits ran past the protocol."),
-                                                 f"{len(rows) - len(short)} of {len(rows)} ran 25; exits at a fixed "
-                                                 f"point (seed: n_iter): {_exits_by_cell(short) or 'none'}"
-                                                 + (f" ({cause.finding})" if cause.finding else ""))
-        lines.append(f"{VARIANT_NAMES[variant]}: {evidence}")
-    return Claim(*args, rule, "; ".join(lines) + ". Point fits are textbook EM, listed under it.", grades,
-                 "25 iterations, ε = 10⁻¹²", TEXT)
+def _protocol_runs(data, variant):
+    """Per fit of ``variant`` in likelihood.csv, at most :data:`PAPER_ITERATIONS` iterations; the evidence counts the
+    fits that ran them all and lists the early exits, with their cause (context, whatever the verdict)."""
+    rows = [row for row in data.likelihood if row["variant"] == variant]
+    comparisons = [compare(f"{row['input']} {row['init']} K={row['K']} seed {row['seed']}",
+                           PAPER_ITERATIONS + 0.5 - int(row["n_iter"])) for row in rows]
+    short = [row for row in rows if int(row["n_iter"]) < PAPER_ITERATIONS]
+    cause = _early_exit_cause(short, data.likelihood)
+    return comparisons, (f"{len(rows) - len(short)} of {len(rows)} ran 25; exits at a fixed point (seed: n_iter): "
+                         f"{_exits_by_cell(short) or 'none'}" + (f" ({cause.finding})" if cause.finding else ""))
+
+
+def _past_the_protocol(data, variant, grades, compared):
+    return Cause("Some fits ran past the protocol.")
+
+
+def _no_fits(data):
+    return None if data.likelihood else "likelihood.csv"
+
+
+no_early_exit = PerEmClaim(
+    "no_early_exit", '§IV: "We run 25 iterations of EM for all methods, with a tight tolerance (ε=10⁻¹²) to prevent '
+    'an early exit from the optimization": a statement of the protocol, not a finding. A fit that stops before '
+    "iteration 25 has met the tolerance at a fixed point (our EM stops no other way), where more iterations give the "
+    "same mixture; the authors' own Fig 3 fits stopped early too (their stored mean iterations, authors.csv's n_iter, "
+    "fall below 25 in some cells). So the rule asks that every fit ran the protocol, and the early exits are the "
+    "evidence.", "§IV", "", "Every fit runs the paper's protocol: 25 iterations, ε = 10⁻¹² (an exit only at a fixed "
+    "point)",
+    rule=(f"share, every: one fit of likelihood.csv, at most {PAPER_ITERATIONS} iterations (the protocol; fewer only "
+          "where the ε tolerance met a fixed point)"),
+    quantifier=EVERY, comparisons=_protocol_runs, cause=_past_the_protocol, table=LIKELIHOOD, needs="likelihood.csv",
+    paper="25 iterations, ε = 10⁻¹²", source=TEXT, evidence="{lines}. Point fits are textbook EM, listed under it.",
+    waits=_no_fits)
 
 
 def _exits_by_cell(rows):
@@ -128,7 +136,7 @@ def _fig3_comparisons(data, variant):
             comparison, gap = versus_paper(f"K={k}", ours, value, 2), ours.value - value
             compared.append(replace(comparison, detail=f"{ours:.3f} ± {ours.error:.3f} ({gap:+.3f}, margin "
                                                        f"{comparison.margin + abs(gap):.3f})"))
-    return compared, listing(compared)
+    return listed(compared)
 
 
 def _fig3_cause(data, variant, grades, compared):
@@ -170,7 +178,7 @@ def _ranked(data, variant):
 
 def _ranked_comparisons(data, variant):
     compared = [comparison for comparison, *_ in _ranked(data, variant)]
-    return compared, listing(compared)
+    return listed(compared)
 
 
 def _ranked_cause(data, variant, grades, compared):
@@ -240,10 +248,9 @@ mesh_handles_both_inits = init_contrast(
     PLAIN, "handled both")
 
 
-def points_prefer_an_init(data):
-    """§IV-A: "the point-based methods often had a preferred initialization"."""
-    return prefer_an_init(data, ("§IV-A", "Fig 3", "Point inputs (centroids, vertices) often have a preferred "
-                                 "initialisation"), _POINTS, False, "often")
+points_prefer_an_init = prefer_an_init(
+    "points_prefer_an_init", '§IV-A: "the point-based methods often had a preferred initialization".', "§IV-A",
+    "Fig 3", "Point inputs (centroids, vertices) often have a preferred initialisation", _POINTS, False, "often")
 
 
 FIG5_K = 100
@@ -262,7 +269,7 @@ def _fuller_comparisons(data, variant):
     fitted = {(row["input"], row["variant"]) for row in data.convergence or []
               if int(row["K"]) == FIG5_K and row["init"] == "kmeans"}
     if not {("res4-exact", variant), ("res4-centroids", "textbook")} <= fitted:
-        return [], ""
+        return None
     ours, base = (_fig5_fits(data, "res4-exact", variant, "coverage_2sigma"),
                   _fig5_fits(data, "res4-centroids", "textbook", "coverage_2sigma"))
     close = (_fig5_fits(data, "res4-exact", variant, "eval_ll_25")

@@ -6,9 +6,8 @@ import numpy as np
 
 from dgmm.experiments.report.claims.grading import LOSS, OFTEN_WORDS, TIE, WIN, compare, estimate, inside, magnitude
 from dgmm.experiments.report.claims.record import LIKELIHOOD, PerEmClaim
-from dgmm.experiments.report.claims.rules import (FIG3_MODEL, OWN_CELLS, SIGNIFICANT_NAT, Cause, Claim, em,
-                                                  fitted_variant, graded_share, is_mesh, listing, pending, same,
-                                                  switch_or_not_found)
+from dgmm.experiments.report.claims.rules import (FIG3_MODEL, OWN_CELLS, SIGNIFICANT_NAT, Cause, em, fitted_variant,
+                                                  is_mesh, listing, switch_or_not_found)
 
 
 def still_climbing(data, variant, k=100):
@@ -97,9 +96,10 @@ def _contrast_comparisons(inputs, data, variant):
         compare(f"{name} vs {other} K={k}", magnitude(gaps[other, k]) - magnitude(gap),
                 detail=f"{gap:+.3f} vs {gaps[other, k]:+.3f}")
         for (name, k), gap in gaps.items() if name in mesh for other in points if (other, k) in gaps]
+    if not compared:
+        return None
     return compared, (f"median |kmeans − random| meshes {_median_gap(gaps, mesh):.3f}, points "
-                      f"{_median_gap(gaps, points):.3f} nat; kmeans − random, mesh vs point input: "
-                      + listing(compared)) if compared else ""
+                      f"{_median_gap(gaps, points):.3f} nat; kmeans − random, mesh vs point input: {listing(compared)}")
 
 
 def _contrast_cause(inputs, data, variant, grades, compared):
@@ -122,25 +122,30 @@ def _median_gap(gaps, names):
     return median([abs(gap.value) for (name, _), gap in gaps.items() if name in names])
 
 
-def prefer_an_init(data, args, inputs, towards_kmeans, paper_words):
-    """Point inputs "often" prefer a start: per (point input, K), kmeans − random beyond its band either way, or
-    towards k-means (``towards_kmeans``); point fits are textbook EM in both EMs' grades."""
+def prefer_an_init(name, words, section, figure, title, inputs, towards_kmeans, paper_words):
+    """The claim that point inputs "often" prefer a start: per (point input, K), kmeans − random beyond its band
+    either way, or towards k-means (``towards_kmeans``); point fits are textbook EM in both EMs' grades."""
     bars = "" if towards_kmeans else "|"
-    rule = f"share, often: one (point input, K), {bars}kmeans − random{bars} > 0"
+    return PerEmClaim(
+        name, words, section, figure, title, f"share, often: one (point input, K), {bars}kmeans − random{bars} > 0",
+        OFTEN_WORDS, comparisons=partial(_preferences, inputs, towards_kmeans),
+        cause=partial(_prefer_cause, towards_kmeans), table=LIKELIHOOD,
+        needs="point fits from both starts in likelihood.csv", paper=paper_words,
+        evidence="{lines}. Point fits are the same for both EMs.", mesh=False)
+
+
+def _preferences(inputs, towards_kmeans, data, variant):
+    """Per (point input, K), its kmeans − random (its magnitude unless ``towards_kmeans``)."""
     gaps = init_gaps(data.estimates, FIG3_MODEL, inputs, "textbook")
-    if not gaps:
-        return pending(*args, rule, "point fits from both starts in likelihood.csv", paper_words)
     compared = [compare(f"{name} K={k}", gap if towards_kmeans else magnitude(gap), detail=f"{gap:+.3f}")
                 for (name, k), gap in gaps.items()]
-    grade, evidence = graded_share(compared, OFTEN_WORDS, _prefer_cause(compared, towards_kmeans),
-                                   f"kmeans − random: {listing(compared)}")
-    return Claim(*args, rule, f"{evidence}. Point fits are the same for both EMs.", same(grade), paper_words)
+    return (compared, f"kmeans − random: {listing(compared)}") if compared else None
 
 
-def _prefer_cause(compared, towards_kmeans):
+def _prefer_cause(towards_kmeans, data, variant, grades, compared):
     """Why point inputs do not often prefer (k-means): collapse of k-means starts at high K, when that is where the
     comparisons are lost."""
-    lost = [c for c in compared if c.outcome != WIN]
+    lost = [c for c in compared[variant] if c.outcome != WIN]
     if towards_kmeans and lost and all(c.margin < 0 for c in lost):
         return Cause("K-means-started point fits collapse at high K and end below the random starts.",
                      f"the k-means starts end below the random ones at {'; '.join(map(str, lost))}", OWN_CELLS)

@@ -11,15 +11,15 @@ The ATE claim is graded twice (:func:`on_authors_protocol`): on our per-frame pr
 shorter prefix the sweep runs it on (``odometry.authors_frames``).
 """
 from collections import defaultdict
-from dataclasses import replace
+from functools import partial
 
 import numpy as np
 
 from dgmm.experiments.report import paper
-from dgmm.experiments.report.claims.grading import PLAIN, Estimate, compare, estimate, grade_share, versus_paper
-from dgmm.experiments.report.claims.rules import (SIMILAR_TIME, TEXT, VARIANT_NAMES, WORDS, Cause, Claim, Study,
-                                                  graded_share, missing, pending, per_variant, same)
-from dgmm.experiments.report.claims.timings import beside, timing_claim
+from dgmm.experiments.report.claims.grading import PLAIN, Estimate, compare, estimate, versus_paper
+from dgmm.experiments.report.claims.record import ODOMETRY, PerEmClaim, twin
+from dgmm.experiments.report.claims.rules import SIMILAR_TIME, TEXT, VARIANT_NAMES, Cause, Study
+from dgmm.experiments.report.claims.timings import TimingClaim
 from dgmm.odometry.frame_model import UNSIZED_METHODS
 from dgmm.odometry.protocols import OURS
 
@@ -177,75 +177,94 @@ def _lost(rows, variant, sequences):
                for s in sequences if {"gmm-pixels", "gmm-points"} <= runs.get(s, {}).keys())
 
 
-def pixels_beat_points(data):
-    """§VI-D: pixel primitives give "absolute translational error RMSE of 0.878 m, a small improvement (2.4%) over
-    the 0.899 m APE produced from building GMMs without uncertainty primitives"."""
-    args = ("§VI-D", "Fig 7", "GMMs of pixel primitives give a lower ATE than plain-point GMMs")
-    rule = "share, plain: one sequence, gmm-pixels' ATE RMSE < gmm-points' (band: seed spread); ICP: context"
-    improvement = paper.FIG7_ATE_M["gmm-points"] / paper.FIG7_ATE_M["gmm-pixels"] - 1
-    published = (f"{paper.FIG7_ATE_M['gmm-pixels']} vs {paper.FIG7_ATE_M['gmm-points']} m ({improvement:.1%} "
-                 "improvement)")
-    if data.odometry is None:
-        return pending(*args, rule, WHAT, published, TEXT)
+IMPROVEMENT = paper.FIG7_ATE_M["gmm-points"] / paper.FIG7_ATE_M["gmm-pixels"] - 1
+"""The paper's improvement of pixel primitives over plain points (2.4%)."""
 
-    def grade(variant):
-        runs = {s: r for s, r in _ates(data.odometry, variant).items() if {"gmm-pixels", "gmm-points"} <= r.keys()}
-        if not runs:
-            return missing(f"gmm-pixels and gmm-points runs with {VARIANT_NAMES[variant]} in odometry.csv")
-        comparisons = [compare(s, r["gmm-pixels"] - r["gmm-points"], higher=False,
-                               detail=f"pixels {r['gmm-pixels']:.3f} m, points {r['gmm-points']:.3f} m "
-                                      f"({r['gmm-points'].value / r['gmm-pixels'].value - 1:+.1%})"
-                                      + (f", icp {r['icp']:.3f} m" if "icp" in r else ""))
-                       for s, r in runs.items()]
-        unit_rows = [row for row in data.all_odometry or [] if row.get("protocol") == UNIT]
-        return graded_share(comparisons, PLAIN, _pixel_cause(data.odometry, comparisons, variant, unit_rows),
-                            "; ".join(f"{c.label} {c.detail}" for c in comparisons))
 
-    grades, lines = per_variant(grade)
+def _pixels_and_points(data, variant):
+    """Per sequence, gmm-pixels' ATE below gmm-points' (ICP: context)."""
+    runs = {s: r for s, r in _ates(data.odometry, variant).items() if {"gmm-pixels", "gmm-points"} <= r.keys()}
+    if not runs:
+        return None
+    comparisons = [compare(s, r["gmm-pixels"] - r["gmm-points"], higher=False,
+                           detail=f"pixels {r['gmm-pixels']:.3f} m, points {r['gmm-points']:.3f} m "
+                                  f"({r['gmm-points'].value / r['gmm-pixels'].value - 1:+.1%})"
+                                  + (f", icp {r['icp']:.3f} m" if "icp" in r else ""))
+                   for s, r in runs.items()]
+    return comparisons, "; ".join(f"{c.label} {c.detail}" for c in comparisons)
+
+
+def _pixel_switch(data, variant, grades, compared):
+    """:func:`_pixel_cause` on the claim's runs, with the unit-size runs of the whole table."""
+    unit_rows = [row for row in data.all_odometry or [] if row.get("protocol") == UNIT]
+    return _pixel_cause(data.odometry, compared[variant], variant, unit_rows)
+
+
+def _runs_context(data):
+    """The evidence's fields of an odometry claim: the per-frame schedule, what the tie bands rest on, and the
+    sequences whose folders are missing."""
     absent = _missing(data.odometry)
-    return Claim(*args, rule, f"ATE RMSE{_schedule(data.odometry)}, {_seeds(data.odometry)}, {STAND_INS}; "
-                 + " — ".join(lines)
-                 + "." + (f" Pending: {'; '.join(absent)}." if absent else ""), grades, published, TEXT)
+    return {"schedule": _schedule(data.odometry), "seeds": _seeds(data.odometry),
+            "absent": f" Pending: {'; '.join(absent)}." if absent else ""}
+
+
+def _no_table(data):
+    return WHAT if data.odometry is None else None
+
+
+pixels_beat_points = PerEmClaim(
+    "pixels_beat_points", '§VI-D: pixel primitives give "absolute translational error RMSE of 0.878 m, a small '
+    'improvement (2.4%) over the 0.899 m APE produced from building GMMs without uncertainty primitives".',
+    "§VI-D", "Fig 7", "GMMs of pixel primitives give a lower ATE than plain-point GMMs",
+    rule="share, plain: one sequence, gmm-pixels' ATE RMSE < gmm-points' (band: seed spread); ICP: context",
+    quantifier=PLAIN, comparisons=_pixels_and_points, cause=_pixel_switch, table=ODOMETRY,
+    needs="gmm-pixels and gmm-points runs with {em} in odometry.csv",
+    paper=f"{paper.FIG7_ATE_M['gmm-pixels']} vs {paper.FIG7_ATE_M['gmm-points']} m ({IMPROVEMENT:.1%} improvement)",
+    source=TEXT, evidence=f"ATE RMSE{{schedule}}, {{seeds}}, {STAND_INS}; {{lines}}.{{absent}}", separator=" — ",
+    context=_runs_context, waits=_no_table)
+
+
+def _authors_view(data):
+    return data.with_odometry_protocol(AUTHORS_PROTOCOL)
+
+
+def _no_authors_runs(view):
+    """What the authors' protocol's twin waits for while odometry.csv has no run of it."""
+    if any(row.get("protocol") == AUTHORS_PROTOCOL for row in view.all_odometry or []):
+        return None
+    return f"odometry runs of protocol {AUTHORS_PROTOCOL} (config odometry.protocols)"
 
 
 def on_authors_protocol(claim):
-    """``claim`` graded on the runs of :data:`AUTHORS_PROTOCOL` (:meth:`Measurements.with_odometry_protocol`),
-    titled so; pending, naming the config it needs, while odometry.csv has none."""
-
-    def graded(data):
-        result = claim(data.with_odometry_protocol(AUTHORS_PROTOCOL))
-        result = replace(result, title=f"{result.title} (the authors' per-frame protocol, {AUTHORS_PROTOCOL})")
-        if any(row.get("protocol") == AUTHORS_PROTOCOL for row in data.all_odometry or []):
-            return result
-        needs = f"odometry runs of protocol {AUTHORS_PROTOCOL} (config odometry.protocols)"
-        return replace(result, evidence=f"waiting for data: {needs}.", grades=same(missing(needs)))
-
-    graded.__name__ = graded.__qualname__ = f"{claim.__name__}_on_{AUTHORS_PROTOCOL.replace('-', '_')}"
-    graded.__wrapped__ = claim
-    graded.__doc__ = f"{claim.__doc__}\n\n    Graded on the authors' protocol (:func:`on_authors_protocol`)."
-    return graded
+    """``claim`` graded on the runs of :data:`AUTHORS_PROTOCOL` (:meth:`Measurements.with_odometry_protocol`,
+    :func:`~.record.twin`), titled so."""
+    return twin(claim, f"on_{AUTHORS_PROTOCOL.replace('-', '_')}", f"the authors' per-frame protocol, "
+                f"{AUTHORS_PROTOCOL}", _authors_view, _no_authors_runs)
 
 
-def paper_sequence_values(data):
-    """§VI-D: the ATE RMSE on fr3/long_office_household, 0.878 m (pixels) and 0.899 m (points)."""
-    args = ("§VI-D", "Fig 7", "On fr3/long_office_household the ATE is 0.878 m (pixels), 0.899 m (points)")
-    rule = "equivalence, plain: one method, ATE within its tie band (seed spread) plus the paper's rounding (0.5 mm)"
-    published = f"{paper.FIG7_ATE_M['gmm-pixels']} / {paper.FIG7_ATE_M['gmm-points']} m"
+def _paper_sequence(data, variant):
+    """The paper's sequence's ATEs against its published ones."""
+    run = _ates(data.odometry, variant).get(PAPER_SEQUENCE, {})
+    if not set(paper.FIG7_ATE_M) <= run.keys():
+        return None
+    comparisons = [versus_paper(method, run[method], value, PAPER_DECIMALS)
+                   for method, value in paper.FIG7_ATE_M.items()]
+    return comparisons, "; ".join(map(str, comparisons))
 
-    def grade(variant):
-        run = _ates(data.odometry, variant).get(PAPER_SEQUENCE, {})
-        if not set(paper.FIG7_ATE_M) <= run.keys():
-            return missing(f"a run of {PAPER_SEQUENCE} (its folder under ../shared/data/tum)")
-        comparisons = [versus_paper(method, run[method], value, PAPER_DECIMALS)
-                       for method, value in paper.FIG7_ATE_M.items()]
-        return (grade_share(comparisons, PLAIN, "Cause not found: the paper does not state its per-frame EM "
-                            "schedule, and ours is chosen by measurement (odometry.schedule)."),
-                "; ".join(str(c) for c in comparisons))
 
-    grades, lines = per_variant(grade)
-    evidence = (f"{_seeds(data.odometry)}; {' — '.join(lines)}." if lines else
-                f"waiting for data: a run of {PAPER_SEQUENCE}.")
-    return Claim(*args, rule, evidence, grades, published, TEXT)
+def _schedule_unstated(data, variant, grades, compared):
+    return Cause("Cause not found: the paper does not state its per-frame EM schedule, and ours is chosen by "
+                 "measurement (odometry.schedule).")
+
+
+paper_sequence_values = PerEmClaim(
+    "paper_sequence_values", "§VI-D: the ATE RMSE on fr3/long_office_household, 0.878 m (pixels) and 0.899 m "
+    "(points).", "§VI-D", "Fig 7", "On fr3/long_office_household the ATE is 0.878 m (pixels), 0.899 m (points)",
+    rule="equivalence, plain: one method, ATE within its tie band (seed spread) plus the paper's rounding (0.5 mm)",
+    quantifier=PLAIN, comparisons=_paper_sequence, cause=_schedule_unstated, table=ODOMETRY,
+    needs=f"a run of {PAPER_SEQUENCE} (its folder under ../shared/data/tum)",
+    paper=f"{paper.FIG7_ATE_M['gmm-pixels']} / {paper.FIG7_ATE_M['gmm-points']} m", source=TEXT,
+    evidence="{seeds}; {lines}.", separator=" — ", context=_runs_context)
 
 
 def _iterations(data, check):
@@ -273,47 +292,37 @@ D2D_PRIMITIVES = "d2d primitives"
 """The timing check of §VI-D's D2D claims, graded on the paper's optimiser (BFGS) for pixels against points."""
 
 
-def _d2d_primitives_claim(data, title, target):
-    """A §VI-D D2D claim: the time ratio pixels / points under BFGS in ``target`` (:func:`timing_claim`)."""
-    settings = ("pixels bfgs", "points bfgs")
-    return timing_claim(data, "§VI-D", "", title, D2D_PRIMITIVES, settings, target, "22% faster", TEXT,
-                        _iteration_cause(data, D2D_PRIMITIVES, settings,
-                                         "each evaluates the same K × K component pairs"))
+BFGS_SETTINGS = ("pixels bfgs", "points bfgs")
+"""The D2D primitives check's settings of the paper's optimiser."""
+_D2D_ITERATIONS = partial(_iteration_cause, check=D2D_PRIMITIVES, settings=BFGS_SETTINGS,
+                          per_iteration="each evaluates the same K × K component pairs")
 
+d2d_faster_with_pixels = TimingClaim(
+    "d2d_faster_with_pixels", '§VI-D: "we found that D2D registration time was 22% faster when using GMMs built from '
+    'primitives" (with the paper\'s optimiser: "our implementation used numerical gradients and BFGS").', "§VI-D", "",
+    "D2D is faster between GMMs of pixel primitives than of plain points", D2D_PRIMITIVES, BFGS_SETTINGS, (0.0, 1.0),
+    "22% faster", TEXT, _D2D_ITERATIONS, beside=((("pixels", "points"), "ours (Gauss-Newton)"),))
 
-def d2d_faster_with_pixels(data):
-    """§VI-D: "we found that D2D registration time was 22% faster when using GMMs built from primitives" (with the
-    paper's optimiser: "our implementation used numerical gradients and BFGS")."""
-    claim = _d2d_primitives_claim(data, "D2D is faster between GMMs of pixel primitives than of plain points",
-                                  (0.0, 1.0))
-    return beside(claim, data, D2D_PRIMITIVES, ("pixels", "points"), "ours (Gauss-Newton)")
+d2d_faster_by_22_percent = TimingClaim(
+    "d2d_faster_by_22_percent", '§VI-D\'s magnitude, "22% faster": the time ratio pixels / points at 0.78, to the '
+    "paper's printed digit (21.5% to 22.5% faster).", "§VI-D", "", "D2D between GMMs of pixel primitives is 22% "
+    "faster than of plain points", D2D_PRIMITIVES, BFGS_SETTINGS, (0.775, 0.785), "22% faster", TEXT, _D2D_ITERATIONS)
 
+gmm_runtime_matches_icp = TimingClaim(
+    "gmm_runtime_matches_icp", 'Fig 7\'s caption: "Runtime for both methods was similar" (GMM D2D with pixel '
+    'primitives and ICP on "2,500 points randomly sampled from each point cloud (selected to roughly match the '
+    'run-time performance of our method)").', "§VI-D", "Fig 7", "GMM odometry and 2,500-point ICP take similar time "
+    "per frame", "odometry frame", ("gmm-pixels", "icp"), SIMILAR_TIME, "similar",
+    cause=Cause("Cause not found: the check times whole frames, the mixture's fit and its registration together."))
 
-def d2d_faster_by_22_percent(data):
-    """§VI-D's magnitude, "22% faster": the time ratio pixels / points at 0.78, to the paper's printed digit (21.5%
-    to 22.5% faster)."""
-    return _d2d_primitives_claim(data, "D2D between GMMs of pixel primitives is 22% faster than of plain points",
-                                 (0.775, 0.785))
-
-
-def gmm_runtime_matches_icp(data):
-    """Fig 7's caption: "Runtime for both methods was similar" (GMM D2D with pixel primitives and ICP on "2,500
-    points randomly sampled from each point cloud (selected to roughly match the run-time performance of our
-    method)")."""
-    return timing_claim(data, "§VI-D", "Fig 7", "GMM odometry and 2,500-point ICP take similar time per frame",
-                        "odometry frame", ("gmm-pixels", "icp"), SIMILAR_TIME, "similar", WORDS,
-                        Cause("Cause not found: the check times whole frames, the mixture's fit and its registration "
-                              "together."))
-
-
-def determinant_free_faster(data):
-    """§VI-D: "We used the determinant-free method as it was much faster in our re-implementation"."""
-    check = "d2d determinant"
-    return timing_claim(data, "§VI-D", "", "Determinant-free D2D is much faster than D2D with the determinant",
-                        check, ("with determinant", "determinant-free"), (SIMILAR_TIME[1], float("inf")),
-                        "much faster", WORDS,
-                        _iteration_cause(data, check, ("with determinant", "determinant-free"),
-                                         "each evaluation with it adds a 3 × 3 determinant per pair"))
+DETERMINANT = ("with determinant", "determinant-free")
+"""The D2D determinant check's settings."""
+determinant_free_faster = TimingClaim(
+    "determinant_free_faster", '§VI-D: "We used the determinant-free method as it was much faster in our '
+    're-implementation".', "§VI-D", "", "Determinant-free D2D is much faster than D2D with the determinant",
+    "d2d determinant", DETERMINANT, (SIMILAR_TIME[1], float("inf")), "much faster",
+    cause=partial(_iteration_cause, check="d2d determinant", settings=DETERMINANT,
+                  per_iteration="each evaluation with it adds a 3 × 3 determinant per pair"))
 
 
 CLAIMS = (pixels_beat_points, on_authors_protocol(pixels_beat_points), paper_sequence_values, d2d_faster_with_pixels,

@@ -8,19 +8,19 @@ of two methods differenced (a mean over its median, a ratio of means) takes the 
 :func:`~.grading.bootstrap`.
 """
 from dataclasses import replace
+from functools import partial
 
 import numpy as np
 
 from dgmm.experiments.report import paper
 from dgmm.experiments.report.claims.grading import (EVERY, LOSS, NOT, PLAIN, REPRODUCED, TIE, WIN, Estimate, Grade,
-                                                    TimeRatio, bootstrap, compare, estimate, grade_share, grade_time,
-                                                    inside, paired_difference, versus_paper, within)
-from dgmm.experiments.report.claims.record import REGISTRATION, PerEmClaim
+                                                    TimeRatio, bootstrap, compare, estimate, grade_time, inside,
+                                                    paired_difference, versus_paper, within)
+from dgmm.experiments.report.claims.record import OPTIMISER_CHECK, REGISTRATION, PerEmClaim
 from dgmm.experiments.report.claims.rules import (EM_VARIANTS, ERROR_NAMES, NOTEBOOK, SIMILAR_TIME, TEXT, VARIANTS,
-                                                  WORDS, WRONG_MINIMUM_DEG, Cause, Claim, Study, conjoined, em,
-                                                  graded_share, missing, pending, per_variant, same, sentence, unwon,
-                                                  wrong_minima)
-from dgmm.experiments.report.claims.timings import MIN_REPEATS, beside, timing_claim
+                                                  WORDS, WRONG_MINIMUM_DEG, Cause, Claim, Study, conjoined, em, pending,
+                                                  same, sentence, unwon, wrong_minima)
+from dgmm.experiments.report.claims.timings import MIN_REPEATS, TimingClaim
 from dgmm.experiments.report.tables import FIG6_MESH
 
 FIG6_METHODS = ("mesh-kmeans", "mesh-random", "points-kmeans", "points-random", "icp", "cpd")
@@ -80,15 +80,23 @@ def _optimiser_errors(rows, setting):
             if (row["optimiser"], row["rotation"]) == setting}
 
 
-def _same_result(data, title, first, second, paper_words):
-    """Equivalence of two optimiser settings' P2D results on the same trials."""
-    args = ("§VI-A", "", title)
-    rule = (f"equivalence, every: each mean error, {'/'.join(first)} − {'/'.join(second)}, within the tie band of two "
-            "unpaired means")
+def same_result(name, words, title, first, second, paper_words):
+    """The claim that two optimiser settings (``(optimiser, rotation)``) give the same P2D results on the same
+    trials: each mean error's difference within the tie band of two unpaired means. One P2D run serves both EMs."""
+    return PerEmClaim(
+        name, words, "§VI-A", "", title,
+        rule=(f"equivalence, every: each mean error, {'/'.join(first)} − {'/'.join(second)}, within the tie band of "
+              "two unpaired means"),
+        quantifier=EVERY, comparisons=partial(_same_result, first, second), cause=_settings_differ,
+        table=OPTIMISER_CHECK, needs=OPTIMISERS, paper=paper_words, mesh=False)
+
+
+def _same_result(first, second, data, variant):
+    """Per error, the two settings' mean errors over their common trials, and the largest per-trial difference."""
     a, b = _optimiser_errors(data.optimisers or [], first), _optimiser_errors(data.optimisers or [], second)
     trials = sorted(a.keys() & b.keys())
     if not trials:
-        return pending(*args, rule, OPTIMISERS, paper_words, WORDS)
+        return None
     comparisons, lines = [], []
     for index, name in enumerate(ERROR_NAMES):
         x, y = (estimate([errors[t][index] for t in trials]) for errors in (a, b))
@@ -97,16 +105,18 @@ def _same_result(data, title, first, second, paper_words):
         largest = max(abs(a[t][index] - b[t][index]) for t in trials)
         lines.append(f"mean {ERROR_NAMES[name]} error {x:.4g} vs {y:.4g}{UNITS[name]} (band ±{band:.2g}; largest "
                      f"per-trial difference {largest:.1e})")
-    grade = grade_share(comparisons, EVERY, "The two settings' mean errors differ beyond the trials' noise.")
-    return Claim(*args, rule, f"{len(trials)} trials (P2D, forward differences, textbook mesh-kmeans mixture): "
-                 + "; ".join(lines) + ".", same(grade), paper_words, WORDS)
+    return comparisons, f"{len(trials)} trials (P2D, forward differences, textbook mesh-kmeans mixture): " + "; ".join(
+        lines)
 
 
-def cg_similar_to_bfgs(data):
-    """§VI-A: "we tried both Conjugate Gradients ... and BFGS ... as optimization strategies, which produced similar
-    results"."""
-    return _same_result(data, "CG and BFGS give similar P2D results", ("BFGS", "quaternion"), ("CG", "quaternion"),
-                        "similar")
+def _settings_differ(data, variant, grades, compared):
+    return Cause("The two settings' mean errors differ beyond the trials' noise.")
+
+
+cg_similar_to_bfgs = same_result(
+    "cg_similar_to_bfgs", '§VI-A: "we tried both Conjugate Gradients ... and BFGS ... as optimization strategies, '
+    'which produced similar results".', "CG and BFGS give similar P2D results", ("BFGS", "quaternion"),
+    ("CG", "quaternion"), "similar")
 
 
 def bfgs_faster_than_cg(data):
@@ -134,11 +144,10 @@ def bfgs_faster_than_cg(data):
     return Claim(*args, rule, evidence, same(grade_time(measured, cause)), "faster", WORDS, timings)
 
 
-def rotvec_same_as_quaternion(data):
-    """§VI-A: "our experiments using the rotation vector ... produced nearly identical results in our final
-    registration result"."""
-    return _same_result(data, "A rotation vector gives nearly the same P2D results as a quaternion",
-                        ("BFGS", "quaternion"), ("BFGS", "rotvec"), "nearly identical")
+rotvec_same_as_quaternion = same_result(
+    "rotvec_same_as_quaternion", '§VI-A: "our experiments using the rotation vector ... produced nearly identical '
+    'results in our final registration result".', "A rotation vector gives nearly the same P2D results as a "
+    "quaternion", ("BFGS", "quaternion"), ("BFGS", "rotvec"), "nearly identical")
 
 
 def _cpd_work(data):
@@ -183,16 +192,19 @@ def _authors_cost_switch(data, cause):
                  f"outside it.", cause.finding)
 
 
-def cpd_matches_p2d_runtime(data):
-    """§VI-A: "We adjusted pyCPD to run for 150 iterations to approximately match the run-time of our P2D GMM
-    registration" (whose gradients used numerical differences: "We compute gradients using numerical
-    differences"). Ours and the authors' P2D stand beside in the timings; the authors' is the cause's switch."""
-    check = "cpd vs p2d"
-    claim = timing_claim(data, "§VI-A", "", "pyCPD at 150 iterations takes about as long as the paper's P2D", check,
-                         ("cpd", "p2d numerical"), SIMILAR_TIME, "approximately match", WORDS,
-                         _authors_cost_switch(data, _cpd_work(data)))
-    claim = beside(claim, data, check, ("cpd", AUTHORS_P2D), "the authors' P2D (scikit-learn's score)")
-    return beside(claim, data, check, ("cpd", "p2d"), "ours (analytic gradient)")
+def _cpd_cause(data):
+    """The cause of the CPD timing: the work counts, switched to the authors' P2D cost."""
+    return _authors_cost_switch(data, _cpd_work(data))
+
+
+cpd_matches_p2d_runtime = TimingClaim(
+    "cpd_matches_p2d_runtime", '§VI-A: "We adjusted pyCPD to run for 150 iterations to approximately match the '
+    'run-time of our P2D GMM registration" (whose gradients used numerical differences: "We compute gradients using '
+    'numerical differences"). Ours and the authors\' P2D stand beside in the timings; the authors\' is the cause\'s '
+    "switch.", "§VI-A", "", "pyCPD at 150 iterations takes about as long as the paper's P2D", "cpd vs p2d",
+    ("cpd", "p2d numerical"), SIMILAR_TIME, "approximately match", cause=_cpd_cause,
+    beside=((("cpd", AUTHORS_P2D), "the authors' P2D (scikit-learn's score)"),
+            (("cpd", "p2d"), "ours (analytic gradient)")))
 
 
 # §VI-A: Fig 6 and its caption ----------------------------------------------------------------------------------
@@ -252,7 +264,7 @@ def _fig6_means(data, variant):
     """The Fig 6 means against the notebook's and the evidence line (our means, the comparisons not won)."""
     errors = _errors(data, variant)
     if not errors:
-        return [], ""
+        return None
     comparisons = list(_fig6_comparisons(errors).values())
     return comparisons, _table(errors, np.mean) + unwon(comparisons)
 
@@ -265,8 +277,7 @@ fig6_means_match = PerEmClaim(
           "notebook's"),
     quantifier=PLAIN, comparisons=_fig6_means, cause=_fig6_cause, table=REGISTRATION, needs=WHAT,
     paper="Fig 6's means", source=NOTEBOOK,
-    evidence=f"paper: {_FIG6_PUBLISHED}; ours, mean rotation / translation errors, {{lines}}.", separator=" — ",
-    cause_when_inconclusive=False)
+    evidence=f"paper: {_FIG6_PUBLISHED}; ours, mean rotation / translation errors, {{lines}}.", separator=" — ")
 
 
 TRANSLATION_LIMIT = 1.1
@@ -275,7 +286,9 @@ TRANSLATION_LIMIT = 1.1
 
 def _within_limit(data, variant):
     """Per method, the limit − its mean translation error."""
-    errors = _errors(data, variant) or {}
+    errors = _errors(data, variant)
+    if not errors:
+        return None
     comparisons = [compare(m, Estimate(TRANSLATION_LIMIT) - bootstrap(np.mean, e["trans"]),
                            detail=f"{np.mean(e['trans']):.3g}%") for m, e in errors.items()]
     return comparisons, ", ".join(str(c) for c in comparisons) + unwon(comparisons)
@@ -303,7 +316,7 @@ all_within_model_size = PerEmClaim(
     rule=f"share, every: one method, mean translation error < {TRANSLATION_LIMIT}% (band: bootstrap)",
     quantifier=EVERY, comparisons=_within_limit, cause=_above_limit, table=REGISTRATION, needs=WHAT,
     paper=f"all < {TRANSLATION_LIMIT}%", source=TEXT, evidence="mean translation error, {lines}.", separator=" — ",
-    ours=_worst_translation, cause_when_inconclusive=False)
+    ours=_worst_translation)
 
 
 def _wrong_minima_counts(errors):
@@ -313,36 +326,53 @@ def _wrong_minima_counts(errors):
     return ", ".join(counts) or "none"
 
 
-def outliers_raise_means(data):
-    """Fig 6's caption: "Some methods have outliers that converged to the wrong local minima, and hence have a very
-    large mean relative to their distribution"."""
-    args = ("§VI-A", "Fig 6", "Methods with trials in wrong local minima have a mean above their box")
-    rule = (f"share, plain: given some method with trials beyond {WRONG_MINIMUM_DEG:g}° (wrong minima), one (such "
-            "method, error), mean > Q3 (band: bootstrap); no such method: not reproduced")
+def _stuck_methods(errors):
+    """The methods of ``errors`` with trials in wrong local minima."""
+    return [m for m, e in errors.items() if wrong_minima(e["rot"]).any()]
 
-    def grade(variant):
-        errors = _errors(data, variant)
-        if not errors:
-            return missing(WHAT)
-        methods = [m for m, e in errors.items() if wrong_minima(e["rot"]).any()]
-        if not methods:  # the caption's premise, a count: no comparison of its own
-            return Grade(NOT, "no method in wrong minima", "No trial of any method ends beyond any trial's start."), (
-                f"trials in wrong minima: {_wrong_minima_counts(errors)}")
-        comparisons = [compare(f"{m} {ERROR_NAMES[name]}", bootstrap(_mean_above(75), errors[m][name]),
-                               detail=f"mean {np.mean(errors[m][name]):.3g}, Q3 {np.percentile(errors[m][name], 75):.3g}")
-                       for m in methods for name in ERROR_NAMES]
-        inside = sorted({c.label.split()[0] for c in comparisons if c.outcome == LOSS})
-        cause = (Cause(
-            f"{conjoined(inside)} {'has' if len(inside) == 1 else 'have'} too few trials in wrong local minima to "
-            "lift the mean above the box.",
-            " and ".join(f"{m} has {wrong_minima(errors[m]['rot']).sum()} of {len(errors[m]['rot'])}" for m in inside)
-            + " trials in wrong local minima") if inside else
-            Cause("Cause not found: the means lie within the trials' noise of the boxes' tops."))
-        return graded_share(comparisons, PLAIN, cause, f"trials in wrong minima: {_wrong_minima_counts(errors)}; "
-                            + ", ".join(str(c) for c in comparisons) + unwon(comparisons))
 
-    grades, lines = per_variant(grade)
-    return Claim(*args, rule, " — ".join(lines) + ".", grades, "some methods", WORDS)
+def _above_box(data, variant):
+    """Per (method with trials in wrong minima, error), its mean above its Q3; the wrong-minima counts lead the
+    evidence (alone when no method has any)."""
+    errors = _errors(data, variant)
+    if not errors:
+        return None
+    comparisons = [compare(f"{m} {ERROR_NAMES[name]}", bootstrap(_mean_above(75), errors[m][name]),
+                           detail=f"mean {np.mean(errors[m][name]):.3g}, Q3 {np.percentile(errors[m][name], 75):.3g}")
+                   for m in _stuck_methods(errors) for name in ERROR_NAMES]
+    counts = f"trials in wrong minima: {_wrong_minima_counts(errors)}"
+    return comparisons, (f"{counts}; " + ", ".join(map(str, comparisons)) + unwon(comparisons) if comparisons
+                         else counts)
+
+
+def _no_method_stuck(data, variant):
+    """The caption's premise, a count with no comparison of its own: not reproduced when no method has a trial in a
+    wrong minimum."""
+    if not _stuck_methods(_errors(data, variant)):
+        return Grade(NOT, "no method in wrong minima", "No trial of any method ends beyond any trial's start.")
+    return None
+
+
+def _too_few_stuck(data, variant, grades, compared):
+    """The methods whose mean stays inside the box, with their counts of trials in wrong minima."""
+    errors = _errors(data, variant)
+    inside = sorted({c.label.split()[0] for c in compared[variant] if c.outcome == LOSS})
+    if not inside:
+        return Cause("Cause not found: the means lie within the trials' noise of the boxes' tops.")
+    return Cause(f"{conjoined(inside)} {'has' if len(inside) == 1 else 'have'} too few trials in wrong local minima "
+                 "to lift the mean above the box.",
+                 " and ".join(f"{m} has {wrong_minima(errors[m]['rot']).sum()} of {len(errors[m]['rot'])}"
+                              for m in inside) + " trials in wrong local minima")
+
+
+outliers_raise_means = PerEmClaim(
+    "outliers_raise_means", 'Fig 6\'s caption: "Some methods have outliers that converged to the wrong local minima, '
+    'and hence have a very large mean relative to their distribution".',
+    "§VI-A", "Fig 6", "Methods with trials in wrong local minima have a mean above their box",
+    rule=(f"share, plain: given some method with trials beyond {WRONG_MINIMUM_DEG:g}° (wrong minima), one (such "
+          "method, error), mean > Q3 (band: bootstrap); no such method: not reproduced"),
+    quantifier=PLAIN, comparisons=_above_box, cause=_too_few_stuck, table=REGISTRATION, needs=WHAT,
+    paper="some methods", separator=" — ", premise=_no_method_stuck)
 
 
 # §VI-B ---------------------------------------------------------------------------------------------------------
@@ -357,127 +387,163 @@ def _ours_below_others(errors, statistics, others=OTHERS):
             for name, statistic in statistics.items()]
 
 
-def _versus_others(data, args, rule, statistics, shown, paper_words, others=OTHERS):
-    """A §VI-B claim that our method's ``statistics`` are below those of ``others``, plain; ``shown`` is ``(name,
-    statistic)`` of the evidence's table."""
-
-    def grade(variant):
-        errors = _errors(data, variant)
-        if not errors or not set(OURS) & errors.keys():
-            return missing(WHAT)
-        comparisons = _ours_below_others(errors, statistics, others)
-        return grade_share(comparisons, PLAIN, _beaten(comparisons)), _table(errors, shown[1]) + unwon(comparisons)
-
-    grades, lines = per_variant(grade)
-    return Claim(*args, rule, f"{shown[0]}, rotation / translation: " + " — ".join(lines) + ".", grades, paper_words,
-                 WORDS)
+def versus_others(name, words, title, rule, statistics, shown, paper_words, others=OTHERS):
+    """A §VI-B claim that our method's ``statistics`` (``name -> statistic``) are below those of ``others`` over the
+    same trials, plain; ``shown`` is ``(name, statistic)`` of the evidence's table."""
+    return PerEmClaim(name, words, "§VI-B", "Fig 6", title, rule, PLAIN,
+                      comparisons=partial(_below_others, statistics, shown[1], others), cause=_beaten,
+                      table=REGISTRATION, needs=WHAT, paper=paper_words,
+                      evidence=f"{shown[0]}, rotation / translation: {{lines}}.", separator=" — ")
 
 
-def _beaten(comparisons):
+def _below_others(statistics, shown, others, data, variant):
+    """:func:`_ours_below_others` on ``variant``'s trials, and the table of ``shown`` with the comparisons not
+    won."""
+    errors = _errors(data, variant)
+    if not errors or not set(OURS) & errors.keys():
+        return None
+    comparisons = _ours_below_others(errors, statistics, others)
+    return comparisons, _table(errors, shown) + unwon(comparisons)
+
+
+def _beaten(data, variant, grades, compared):
     """Cause: the other methods that beat ours beyond the trials' noise; when none does, not found (the comparisons
     not won are ties)."""
+    comparisons = compared[variant]
     winners = sorted({c.label.split(" vs ")[1] for c in comparisons if c.outcome == LOSS})
     if winners:
-        return f"{conjoined(winners)} beat{'s' * (len(winners) == 1)} the mesh GMM beyond the trials' noise."
+        return Cause(f"{conjoined(winners)} beat{'s' * (len(winners) == 1)} the mesh GMM beyond the trials' noise.")
     ties = sum(c.outcome == TIE for c in comparisons)
-    return f"Cause not found: {ties} of the {len(comparisons)} comparisons lie within the trials' noise."
+    return Cause(f"Cause not found: {ties} of the {len(comparisons)} comparisons lie within the trials' noise.")
 
 
-def mesh_registers_best(data):
-    """§VI-B: "our mesh-derived Gaussian Mixture Model provides improved registration results when using P2D compared
-    to the existing baselines, ICP and CPD. Not only does our method produce better registration on average, ..."
-    (Fig 6 also shows the points GMM)."""
-    return _versus_others(data, ("§VI-B", "Fig 6", "The mesh GMM registers better on average than the points GMM, "
-                                                   "ICP and CPD"),
-                          "share, plain: one (mesh GMM start, error, other method), mean error < the other's (band: "
-                          "paired bootstrap)", {"": np.mean}, ("mean error", np.mean), "improved, better on average")
+mesh_registers_best = versus_others(
+    "mesh_registers_best", '§VI-B: "our mesh-derived Gaussian Mixture Model provides improved registration results '
+    'when using P2D compared to the existing baselines, ICP and CPD. Not only does our method produce better '
+    'registration on average, ..." (Fig 6 also shows the points GMM).',
+    "The mesh GMM registers better on average than the points GMM, ICP and CPD",
+    "share, plain: one (mesh GMM start, error, other method), mean error < the other's (band: paired bootstrap)",
+    {"": np.mean}, ("mean error", np.mean), "improved, better on average")
+
+better_distribution = versus_others(
+    "better_distribution", '§VI-B: "... but it also demonstrates a better distribution of errors" (Fig 6\'s boxes: '
+    "quartiles).", "The mesh GMM's errors are better distributed: its quartiles are lower",
+    "share, plain: one (mesh GMM start, error, other method, quartile Q1, Q2, Q3), the mesh GMM's < the other's "
+    "(band: paired bootstrap)", {f"Q{i}": _quartile(25 * i) for i in (1, 2, 3)}, ("median error", np.median),
+    "better distribution")
+
+less_prone_to_outliers = versus_others(
+    "less_prone_to_outliers", '§VI-B: "the small difference between the median and mean errors shows that our method '
+    'is less prone to outliers".', "The mesh GMM's mean is close to its median: fewer outliers than the points GMMs",
+    "share, plain: one (mesh GMM start, error, points GMM), mean − median < the points GMM's (the paper's \"small "
+    "difference\", against the point-based GMMs it contrasts; band: paired bootstrap)", {"": _mean_above(50)},
+    ("mean − median", _mean_above(50)), "small difference", POINTS)
 
 
-def better_distribution(data):
-    """§VI-B: "... but it also demonstrates a better distribution of errors" (Fig 6's boxes: quartiles)."""
-    return _versus_others(data, ("§VI-B", "Fig 6", "The mesh GMM's errors are better distributed: its quartiles are "
-                                                   "lower"),
-                          "share, plain: one (mesh GMM start, error, other method, quartile Q1, Q2, Q3), the mesh "
-                          "GMM's < the other's (band: paired bootstrap)",
-                          {f"Q{i}": _quartile(25 * i) for i in (1, 2, 3)},
-                          ("median error", np.median), "better distribution")
+SAME_POINTS = "{lines}. Points GMMs: the same for both EMs."
+"""The evidence of a claim on the points GMMs alone (one grade for both EMs)."""
 
 
-def less_prone_to_outliers(data):
-    """§VI-B: "the small difference between the median and mean errors shows that our method is less prone to
-    outliers"."""
-    return _versus_others(data, ("§VI-B", "Fig 6", "The mesh GMM's mean is close to its median: fewer outliers than "
-                                                   "the points GMMs"),
-                          "share, plain: one (mesh GMM start, error, points GMM), mean − median < the points GMM's "
-                          "(the paper's \"small difference\", against the point-based GMMs it contrasts; band: paired "
-                          "bootstrap)", {"": _mean_above(50)}, ("mean − median", _mean_above(50)), "small difference",
-                          POINTS)
+def _points_errors(data):
+    """``method -> errors`` of Fig 6's points GMMs ({} when none registered): textbook EM's fits in both EMs."""
+    return {m: e for m, e in (_errors(data, "textbook") or {}).items() if m in POINTS}
 
 
-def points_mean_towards_worst_quartile(data):
-    """§VI-B: "the point-based GMM P2D registration results had outliers that dragged the mean towards the worst
-    quartile of results"."""
-    args = ("§VI-B", "Fig 6", "The points GMMs' outliers drag their mean towards the worst quartile")
-    rule = ("share, plain: one (points GMM, error), the mean past the midpoint of the median and Q3, nearer the worst "
-            "quartile than the median (band: bootstrap)")
-    errors = _errors(data, "textbook") or {}
-    if not set(POINTS) & errors.keys():
-        return pending(*args, rule, WHAT, "towards the worst quartile", WORDS)
+def _towards_worst_quartile(data, variant):
+    """Per (points GMM, error), its mean past the midpoint of its median and Q3."""
+    errors = _points_errors(data)
+    if not errors:
+        return None
     comparisons = []
-    for m in POINTS:
-        for name, values in errors.get(m, {}).items():
+    for m, by_error in errors.items():
+        for name, values in by_error.items():
             mean, middle, top = np.mean(values), np.median(values), np.percentile(values, 75)
             comparisons.append(compare(f"{m} {ERROR_NAMES[name]}", bootstrap(_mean_past_midway, values),
                                        detail=f"median {middle:.3g}, mean {mean:.3g}, Q3 {top:.3g}: "
                                               f"{(mean - middle) / (top - middle):.2f} of the way from median to Q3"))
-    grade = grade_share(comparisons, PLAIN, "Some points GMM's mean stays nearer its median than its worst quartile.")
-    return Claim(*args, rule, "; ".join(str(c) for c in comparisons) + unwon(comparisons)
-                 + ". Points GMMs: the same for both EMs.", same(grade),
-                 "towards the worst quartile", WORDS)
+    return comparisons, "; ".join(map(str, comparisons)) + unwon(comparisons)
 
 
-def points_random_mean_three_medians(data):
-    """§VI-B: "The randomly initialized point-based GMM had a mean that was about three times that of its median
-    result"."""
-    args = ("§VI-B", "Fig 6", "The random-start points GMM's mean error is about three times its median")
-    rule = ("equivalence, plain: one error, mean / median rounds to 3 (the paper's \"about three\", a word: 2.5 to 3.5): "
-            "won when its whole tie band (bootstrap) lies inside, lost when wholly outside, tied otherwise")
-    errors = (_errors(data, "textbook") or {}).get("points-random")
+def _nearer_median(data, variant, grades, compared):
+    return Cause("Some points GMM's mean stays nearer its median than its worst quartile.")
+
+
+points_mean_towards_worst_quartile = PerEmClaim(
+    "points_mean_towards_worst_quartile", '§VI-B: "the point-based GMM P2D registration results had outliers that '
+    'dragged the mean towards the worst quartile of results".',
+    "§VI-B", "Fig 6", "The points GMMs' outliers drag their mean towards the worst quartile",
+    rule=("share, plain: one (points GMM, error), the mean past the midpoint of the median and Q3, nearer the worst "
+          "quartile than the median (band: bootstrap)"),
+    quantifier=PLAIN, comparisons=_towards_worst_quartile, cause=_nearer_median, table=REGISTRATION, needs=WHAT,
+    paper="towards the worst quartile", evidence=SAME_POINTS, mesh=False)
+
+POINTS_RANDOM = WHAT + " with points-random trials"
+
+
+def _three_medians(data, variant):
+    """Per error, the random-start points GMM's mean / median inside 2.5 to 3.5."""
+    errors = _points_errors(data).get("points-random")
     if errors is None:
-        return pending(*args, rule, WHAT + " with points-random trials", "≈ 3", TEXT)
+        return None
     comparisons = [inside(ERROR_NAMES[name], bootstrap(_mean_over_median, values), 2.5, 3.5)
                    for name, values in errors.items()]
+    return comparisons, "mean / median, " + "; ".join(map(str, comparisons))
+
+
+def _mean_over_medians(data, variant, comparisons):
+    return " / ".join(f"{_mean_over_median(v):.1f}" for v in _points_errors(data)["points-random"].values())
+
+
+def _wrong_minima_pull(data, variant, grades, compared):
+    """Its trials in wrong local minima, and its mean / median without them."""
+    errors = _points_errors(data)["points-random"]
     wrong = wrong_minima(errors["rot"])
     without = " / ".join(f"{_mean_over_median(values[~wrong]):.1f}" for values in errors.values())
-    grade = grade_share(comparisons, PLAIN, f"Its {wrong.sum()} trials in wrong local minima (rotation error > "
-                        f"{WRONG_MINIMUM_DEG:g}°) pull its mean further up: without them it is {without} times the "
-                        "median.")
-    return Claim(*args, rule, "mean / median, " + "; ".join(str(c) for c in comparisons)
-                 + ". Points GMMs: the same for both EMs.",
-                 same(replace(grade, ours=" / ".join(f"{_mean_over_median(v):.1f}" for v in errors.values()))),
-                 "≈ 3", TEXT)
+    return Cause(f"Its {wrong.sum()} trials in wrong local minima (rotation error > {WRONG_MINIMUM_DEG:g}°) pull its "
+                 f"mean further up: without them it is {without} times the median.")
 
 
-def incorrect_local_minima(data):
-    """§VI-B: the random-start points GMM's mean, about three times its median, "suggesting that some experiments
-    produced results in the incorrect local minima"."""
-    args = ("§VI-B", "Fig 6", "Some random-start points GMM trials end in wrong local minima")
-    rule = (f"comparison: points-random trials with rotation error > {WRONG_MINIMUM_DEG:g}° (beyond any trial's "
-            "start) > 0; context: its mean without them")
-    errors = (_errors(data, "textbook") or {}).get("points-random")
+points_random_mean_three_medians = PerEmClaim(
+    "points_random_mean_three_medians", '§VI-B: "The randomly initialized point-based GMM had a mean that was about '
+    'three times that of its median result".',
+    "§VI-B", "Fig 6", "The random-start points GMM's mean error is about three times its median",
+    rule=("equivalence, plain: one error, mean / median rounds to 3 (the paper's \"about three\", a word: 2.5 to "
+          "3.5): won when its whole tie band (bootstrap) lies inside, lost when wholly outside, tied otherwise"),
+    quantifier=PLAIN, comparisons=_three_medians, cause=_wrong_minima_pull, table=REGISTRATION, needs=POINTS_RANDOM,
+    paper="≈ 3", source=TEXT, evidence=SAME_POINTS, ours=_mean_over_medians, mesh=False)
+
+
+def _some_in_wrong_minima(data, variant):
+    """The count of the random-start points GMM's trials in wrong minima, above 0; its mean without them, for
+    context."""
+    errors = _points_errors(data).get("points-random")
     if errors is None:
-        return pending(*args, rule, WHAT + " with points-random trials", "some", WORDS)
+        return None
     wrong = wrong_minima(errors["rot"])
-    comparison = compare("points-random trials in wrong minima", int(wrong.sum()), detail=f"{wrong.sum()}")
     rest = errors["rot"][~wrong]
-    evidence = (f"{wrong.sum()} of {len(wrong)} trials beyond {WRONG_MINIMUM_DEG:g}° (largest "
-                f"{errors['rot'].max():.0f}°); "
-                f"without them the mean rotation error is {np.mean(rest):.3g}° ({_mean_over_median(rest):.1f} times "
-                f"the median) against {np.mean(errors['rot']):.3g}° ({_mean_over_median(errors['rot']):.1f} times) "
-                "with them. Points GMMs: the same for both EMs.")
-    grade = grade_share([comparison], EVERY, "No points-random trial ends beyond any trial's start.")
-    return Claim(*args, rule, evidence, same(replace(grade, ours=f"{wrong.sum()}/{len(wrong)} trials")), "some",
-                 WORDS)
+    return [compare("points-random trials in wrong minima", int(wrong.sum()), detail=f"{wrong.sum()}")], (
+        f"{wrong.sum()} of {len(wrong)} trials beyond {WRONG_MINIMUM_DEG:g}° (largest {errors['rot'].max():.0f}°); "
+        f"without them the mean rotation error is {np.mean(rest):.3g}° ({_mean_over_median(rest):.1f} times the "
+        f"median) against {np.mean(errors['rot']):.3g}° ({_mean_over_median(errors['rot']):.1f} times) with them")
+
+
+def _trials_in_wrong_minima(data, variant, comparisons):
+    wrong = wrong_minima(_points_errors(data)["points-random"]["rot"])
+    return f"{wrong.sum()}/{len(wrong)} trials"
+
+
+def _none_stuck(data, variant, grades, compared):
+    return Cause("No points-random trial ends beyond any trial's start.")
+
+
+incorrect_local_minima = PerEmClaim(
+    "incorrect_local_minima", '§VI-B: the random-start points GMM\'s mean, about three times its median, "suggesting '
+    'that some experiments produced results in the incorrect local minima".',
+    "§VI-B", "Fig 6", "Some random-start points GMM trials end in wrong local minima",
+    rule=(f"comparison: points-random trials with rotation error > {WRONG_MINIMUM_DEG:g}° (beyond any trial's "
+          "start) > 0; context: its mean without them"),
+    quantifier=EVERY, comparisons=_some_in_wrong_minima, cause=_none_stuck, table=REGISTRATION, needs=POINTS_RANDOM,
+    paper="some", evidence=SAME_POINTS, ours=_trials_in_wrong_minima, mesh=False)
 
 
 CLAIMS = (cg_similar_to_bfgs, bfgs_faster_than_cg, rotvec_same_as_quaternion, cpd_matches_p2d_runtime,

@@ -8,15 +8,16 @@ area and its M-step does not weight by area; it produced the paper's numbers). P
 authors ran gives what they report; the textbook column says whether the method as the paper writes it does too.
 Claims that involve no mixture fitted to a mesh get one verdict in both.
 
-A grade not reproduced names its cause in one sentence (``Grade.why``, for the summary table); the numbers behind
-it, the cells and what was tried, go to the claim's evidence (:class:`Cause`).
+A grade partly or not reproduced names its cause in one sentence (``Grade.why``, for the summary table); an
+inconclusive one says that the data cannot tell; the numbers behind the cause, the cells and what was tried, go to the
+claim's evidence (:class:`Cause`, :func:`explained`).
 """
 import math
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from dgmm.experiments.report.claims.grading import LOSS, PENDING, REPRODUCED, TIE, WIN, Grade, Tally, grade_share
+from dgmm.experiments.report.claims.grading import INCONCLUSIVE, LOSS, PENDING, REPRODUCED, TIE, WIN, Grade, Tally
 from dgmm.experiments.sweep import SIZED, parse_input
 
 VARIANTS = ("authors", "textbook")
@@ -177,33 +178,14 @@ def missing(what):
     return Grade(PENDING, "–", f"Needs {what}.")
 
 
-def per_variant(grade):
-    """Grades and evidence lines of a claim graded on each EM's mixtures.
-
-    ``grade(variant)`` returns ``(Grade, evidence)``, or the :func:`missing` Grade alone when that EM's data are
-    missing; each evidence line is named by its EM.
-
-    Returns
-    -------
-    grades : dict
-        ``variant -> Grade`` for every variant of ``VARIANTS``.
-    lines : list of str
-        ``"<EM>: <evidence>"`` of every EM that had data, in ``VARIANTS`` order.
-    """
-    grades, lines = {}, []
-    for variant in VARIANTS:
-        result = grade(variant)
-        if isinstance(result, Grade):
-            grades[variant] = result
-        else:
-            grades[variant], evidence = result
-            lines.append(f"{VARIANT_NAMES[variant]}: {evidence}")
-    return grades, lines
+def waiting(what):
+    """The evidence of a claim waiting for data: ``what`` names the missing table or run."""
+    return f"waiting for data: {what}."
 
 
 def pending(section, figure, title, rule, what, paper="", source=WORDS):
     """A claim waiting for data: ``what`` names the missing table or run."""
-    return Claim(section, figure, title, rule, f"waiting for data: {what}.", same(missing(what)), paper, source)
+    return Claim(section, figure, title, rule, waiting(what), same(missing(what)), paper, source)
 
 
 def capital(text):
@@ -281,16 +263,19 @@ OWN_CELLS = "the claim's own cells singled out (a start method, a K, an input), 
 """No switch run for it: the cause is read off the claim's own comparisons."""
 
 
-def explained(evidence, cause):
-    """``evidence`` with the finding behind ``cause`` appended (unchanged when it has none)."""
-    return f"{evidence}; cause: {cause.finding}" if cause is not None and cause.finding else evidence
+def explained(evidence, cause, verdict):
+    """``evidence`` of a grade of ``verdict`` with its ``cause`` appended: the cause's finding; for an inconclusive
+    grade, whose sentence says only that the data cannot tell, the cause's own sentence when it has no finding
+    (unchanged when nothing is left to say: a sentence of a grade partly or not reproduced is in the summary)."""
+    said = cause and (cause.finding or (verdict == INCONCLUSIVE and clause(cause.why)))
+    return f"{evidence}; cause: {said}" if said else evidence
 
 
-def graded_share(comparisons, quantifier, cause, evidence=""):
-    """``(Grade, evidence)`` of a share rule: ``cause``'s sentence in the grade and its finding in the evidence
-    when the verdict is not reproduced."""
-    grade = grade_share(comparisons, quantifier, cause.why)
-    return grade, evidence if grade.verdict == REPRODUCED else explained(evidence, cause)
+def clause(text):
+    """A cause's sentence as a clause after "cause:": no final stop, no leading "Cause", first letter lower case
+    ("Cause not found: x." → "not found: x")."""
+    text = text.rstrip(".").removeprefix("Cause ")
+    return text[:1].lower() + text[1:]
 
 
 def misses(comparisons):
@@ -363,6 +348,12 @@ def switch_or_not_found(finding, variant, grades, compared):
 
 SPELLED = 14
 """A share's evidence spells out every comparison up to this many (beyond it, the tied and lost ones)."""
+
+
+def listed(comparisons):
+    """``(comparisons, their listing)`` of a record's comparisons (:mod:`~.record`); None when there are none: the
+    fits they need are missing."""
+    return (comparisons, listing(comparisons)) if comparisons else None
 
 
 def listing(comparisons, spelled=SPELLED):

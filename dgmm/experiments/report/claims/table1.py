@@ -60,18 +60,16 @@ def _percent_of_icp(errors, reference, axis=None):
 
 def table1_claim(name, words, title, rule, quantifier, comparisons, evidence, table, paper_words, source, cause):
     """A Table 1 claim graded per EM: ``comparisons(data, variant)`` its comparisons (none: no data), ``evidence(data,
-    variant)`` the evidence line's numbers, to which the comparisons not won are added; an inconclusive grade says the
-    data cannot tell."""
+    variant)`` the evidence line's numbers, to which the comparisons not won are added."""
     return PerEmClaim(name, words, "§VI-C", "Table 1", title, rule, quantifier,
                       comparisons=partial(_with_evidence, comparisons, evidence), cause=cause, table=table,
-                      needs=LIKELIHOODS if table == LIKELIHOOD else ERRORS, paper=paper_words, source=source,
-                      cause_when_inconclusive=False)
+                      needs=LIKELIHOODS if table == LIKELIHOOD else ERRORS, paper=paper_words, source=source)
 
 
 def _with_evidence(comparisons_of, evidence, data, variant):
-    """``(comparisons, evidence line)`` of a Table 1 claim; no comparisons, no line."""
+    """``(comparisons, evidence line)`` of a Table 1 claim; None without comparisons (no data)."""
     comparisons = comparisons_of(data, variant)
-    return comparisons, evidence(data, variant) + unwon(comparisons) if comparisons else ""
+    return (comparisons, evidence(data, variant) + unwon(comparisons)) if comparisons else None
 
 
 # likelihood ----------------------------------------------------------------------------------------------------
