@@ -304,10 +304,15 @@ def grade_share(comparisons, quantifier, cause=""):
     verdict = quantifier.verdict(tally)
     ours = f"{wins}/{wins + ties + losses} won" + (f", {ties} tied" if ties else "")
     if verdict == INCONCLUSIVE:
-        cause = ("The data cannot tell: " + (f"all {ties} comparisons lie inside their noise." if not wins + losses
-                 else f"{ties} of {wins + ties + losses} comparisons lie inside their noise; the untied ones bear the "
-                 "claim out."))
+        cause = "The data cannot tell: " + _undecided(wins, ties, losses)
     return Grade(verdict, ours, "" if verdict == REPRODUCED else cause)
+
+
+def _undecided(wins, ties, losses):
+    """Which of an inconclusive grade's comparisons the noise leaves undecided, as a sentence."""
+    if wins + losses:
+        return f"{ties} of {wins + ties + losses} comparisons lie inside their noise; the untied ones bear the claim out."
+    return "its one comparison lies inside its noise." if ties == 1 else f"all {ties} comparisons lie inside their noise."
 
 
 @dataclass(frozen=True)
