@@ -223,9 +223,9 @@ def _fig6_comparisons(errors):
 
 ICP_BOOKKEEPING = ("icp", "rot")
 """The Fig 6 mean a study explains: the authors' ICP rotation (benchmarks/studies/icp_authors.py)."""
-ICP_BOOKKEEPING_CAUSE = ("the authors' script composes its ICP steps' rotations in reverse order (registration_test.py: "
-                         "R = R @ rotmat); recomputed so on our trials, its mean lands on the paper's (measured in a "
-                         "study, not the sweep: benchmarks/studies/icp_authors.py, docs/user_guide/registration.md)")
+ICP_BOOKKEEPING_CAUSE = ("the authors' script composes its ICP steps' rotations in reverse order (R = R @ rotmat); so "
+                         "recomputed on our trials, its mean lands on the paper's (a study: "
+                         "benchmarks/studies/icp_authors.py)")
 """Its finding, with no number of its own: the study's table and command are in the registration guide."""
 ICP_AUTHORS = Study("docs/user_guide/registration.md", "python benchmarks/studies/icp_authors.py")
 """The study that recomputes the authors' ICP rotation on our trials."""
