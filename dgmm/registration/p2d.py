@@ -120,7 +120,7 @@ def p2d_params_cost(points, centre, mixture, compiled=True):
     def cost(params, with_grad):
         rotation, jacobian = kernels.quaternion_rotation_and_jacobian(params[3:])
         value = kernels.p2d_negative_mean_log_likelihood(local, rotation, centre + params[:3] - mixture.origin, table,
-                                                         SCREEN, *buffers)
+                                                         SCREEN, False, *buffers)
         if not with_grad:
             return value
         return value, kernels.p2d_params_gradient(mixture.precisions, mixture.precision_means, local, jacobian,
@@ -185,7 +185,7 @@ def _compiled_pose_cost(local, centre, mixture):
     def evaluate(rotation, translation):
         buffers = kernels.p2d_pose_buffers(*buffers_shape)
         cost = kernels.p2d_negative_mean_log_likelihood(local, rotation, centre + translation - mixture.origin,
-                                                        table, SCREEN, *buffers)
+                                                        table, SCREEN, True, *buffers)
         return cost, partial(kernels.p2d_pose_derivatives, mixture.precisions, mixture.precision_means, *buffers)
 
     return evaluate
