@@ -127,7 +127,8 @@ def p2d_negative_mean_log_likelihood(local, rotation, shift, table, screen, vect
     table : ndarray of shape (10, n_components)
         :attr:`~dgmm.registration.fitted.FittedMixture.log_density_table`.
     screen : float
-        :data:`dgmm.gaussian.SCREEN`: pairs with ``l_nk < max_k l_nk - screen`` are left out.
+        Pairs with ``l_nk < max_k l_nk - screen`` are left out: :data:`dgmm.gaussian.SCREEN` (BFGS) or
+        :func:`dgmm.registration.p2d.gauss_newton_screen` (Gauss-Newton).
     vector_exp : bool
         The exponentials by :func:`_exp_in_place` (Gauss-Newton's: within an ulp, an eighth less time a cost) or by
         ``math.exp`` (BFGS's: the bits the paper's runs have always had).
