@@ -209,8 +209,10 @@ def register_p2d(source, mixture, gradient="analytic", callback=None, options=No
     ----------
     source : array-like of shape (n_points, 3)
         Points to move into the mixture's frame.
-    mixture : fitted Gaussian mixture
-        See :mod:`dgmm.registration.fitted` for the attributes used.
+    mixture : fitted Gaussian mixture or FittedMixture
+        See :mod:`dgmm.registration.fitted` for the attributes used. Its tables are built at every call (0.15 ms a
+        bunny registration, a tenth of Gauss-Newton's); registering many sources to one mixture, pass
+        ``FittedMixture.from_fitted("mixture", mixture)`` to build them once.
     gradient : {"analytic", "numeric"}, default="analytic"
         BFGS only: ``"numeric"`` lets BFGS take forward differences, the paper's setup; it usually ends on
         scipy's "precision loss" stop (``converged=False``) near the same optimum.
