@@ -77,19 +77,21 @@ def test_components_far_beyond_the_screen_change_nothing():
         np.testing.assert_allclose(ours, theirs, rtol=0, atol=1e-12 * np.abs(theirs).max())
 
 
-def test_a_points_terms_do_not_depend_on_its_block(bunny_mixture):
+@pytest.mark.parametrize("vector_exp", [True, False])
+def test_a_points_terms_do_not_depend_on_its_block(bunny_mixture, vector_exp):
     """The cost computes points a block at a time: each point alone (a block of one) gives its pairs and sums
-    to the bit, and sets of fewer, as many and more points than a block agree with numpy's cost."""
+    to the bit, with either exponential, and sets of fewer, as many and more points than a block agree with numpy's
+    cost."""
     vertices, mixture = bunny_mixture
     rotation, shift = Rotation.from_rotvec([0.1, -0.2, 0.05]).as_matrix(), 0.002 * np.ones(3)
     local = np.ascontiguousarray(vertices[:70] - vertices[:70].mean(axis=0))
     table = mixture.log_density_table
     buffers = kernels.p2d_pose_buffers(len(local), table.shape[1])
-    kernels.p2d_negative_mean_log_likelihood(local, rotation, shift, table, SCREEN, *buffers)
+    kernels.p2d_negative_mean_log_likelihood(local, rotation, shift, table, SCREEN, vector_exp, *buffers)
     starts, components, terms, sums = buffers[2:]
     for n in range(len(local)):
         alone = kernels.p2d_pose_buffers(1, table.shape[1])
-        kernels.p2d_negative_mean_log_likelihood(local[n:n + 1], rotation, shift, table, SCREEN, *alone)
+        kernels.p2d_negative_mean_log_likelihood(local[n:n + 1], rotation, shift, table, SCREEN, vector_exp, *alone)
         kept = slice(starts[n], starts[n + 1])
         np.testing.assert_array_equal(alone[3][:alone[2][1]], components[kept])
         np.testing.assert_array_equal(alone[4][:alone[2][1]], terms[kept])
