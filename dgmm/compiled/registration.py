@@ -12,7 +12,8 @@
   before computing the ones that may matter, then works on arrays of a few hundred to a few thousand pairs, and at
   odometry's sizes (K = 100 per frame) its time goes to numpy's per-call overhead. Here every pair's exact term is
   computed in one pass (about 50 floating-point operations a pair), and the derivatives run over the pairs within
-  ``e^-screen`` of the largest term, the pairs the numpy derivatives keep.
+  ``e^-screen`` of the largest term, the pairs the numpy derivatives keep. Gauss-Newton's whole loop runs here too
+  (:func:`d2d_gauss_newton`), as P2D's.
 
 The numpy functions stay the reference (``p2d_pose_cost(compiled=False)``, ``p2d_params_cost(compiled=False)``,
 ``d2d_pose_cost(compiled=False)``, tested against these). The kernels and the 3x3 helpers they call live in this one
@@ -696,3 +697,123 @@ def d2d_pose_derivatives(fixed_means, fixed_covariances, moved, rotated, moved_c
             exact[3 + r, s] += across[s, r]  # second[3:, :3] = -(Σ term S⁻¹ U)ᵀ
             exact[s, 3 + r] += across[s, r]
     return gradient, gauss_newton, exact
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _d2d_pose_buffers(n_fixed, n_moving):
+    """:func:`d2d_gauss_newton`'s buffers for one pose: ``(rotated (n_moving, 3), moved (n_moving, 3),
+    moved_covariances (n_moving, 3, 3))`` and :func:`d2d_kept_pairs`' ``(count, fixed index, moving index, log
+    terms)``."""
+    size = n_fixed * n_moving
+    return (np.empty((n_moving, 3)), np.empty((n_moving, 3)), np.empty((n_moving, 3, 3)), np.zeros(1, dtype=np.int64),
+            np.empty(size, dtype=np.int64), np.empty(size, dtype=np.int64), np.empty(size))
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _d2d_cost_at(fixed_means, fixed_covariances, offsets, moving_covariances, centre, log_weights, screen, floor,
+                 rotation, translation, buffers):
+    """The D2D cost at the pose ``(R, t')`` (:func:`d2d_negative_overlap`), the moving mixture moved into
+    ``buffers``: ``p = R (μⱼ - c)``, ``p + c + t'`` and ``R Σⱼ Rᵀ``."""
+    rotated, moved, moved_covariances, count, fixed_index, moving_index, log_terms = buffers
+    turned = np.empty((3, 3))
+    for j in range(offsets.shape[0]):
+        for a in range(3):
+            rotated[j, a] = (rotation[a, 0] * offsets[j, 0] + rotation[a, 1] * offsets[j, 1]
+                             + rotation[a, 2] * offsets[j, 2])
+            moved[j, a] = rotated[j, a] + centre[a] + translation[a]
+        _product(rotation, moving_covariances[j], turned)
+        for a in range(3):
+            for b in range(3):
+                moved_covariances[j, a, b] = (turned[a, 0] * rotation[b, 0] + turned[a, 1] * rotation[b, 1]
+                                              + turned[a, 2] * rotation[b, 2])
+    return d2d_negative_overlap(fixed_means, fixed_covariances, moved, moved_covariances, log_weights, screen, floor,
+                                count, fixed_index, moving_index, log_terms)
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def d2d_gauss_newton(fixed_means, fixed_covariances, offsets, moving_covariances, centre, log_weights, screen, floor,
+                     scale, max_iter, tol, damping, max_step, constants, rotations, translations, costs):
+    """:func:`dgmm.registration.solvers.minimise_gauss_newton` on the D2D kernels, from the pose ``rotations[0]``,
+    ``translations[0]`` (the moving means ``μⱼ -> R (μⱼ - c) + c + t'``): the steps of :func:`p2d_gauss_newton`,
+    with no Python between the kernels.
+
+    Parameters
+    ----------
+    fixed_means, fixed_covariances, log_weights, screen, floor
+        As :func:`d2d_negative_overlap` takes them.
+    offsets : ndarray of shape (n_moving, 3)
+        ``μⱼ - c``.
+    moving_covariances : ndarray of shape (n_moving, 3, 3)
+    centre : ndarray of shape (3,)
+        ``c``.
+    scale, max_iter, tol, damping, max_step, constants, rotations, translations, costs
+        As :func:`p2d_gauss_newton` takes them.
+
+    Returns
+    -------
+    iterations, converged, status
+        As :func:`p2d_gauss_newton`'s.
+    """
+    over_relaxation, contraction, min_damping, max_damping, backtracks = constants
+    n_fixed, n_moving = fixed_means.shape[0], offsets.shape[0]
+    kept = _d2d_pose_buffers(n_fixed, n_moving)
+    trial = _d2d_pose_buffers(n_fixed, n_moving)
+    scratch, factor = np.empty((6, 6)), np.zeros((6, 6))
+    step, move, new_translation = np.empty(6), np.empty(6), np.empty(3)
+    rotation, translation = rotations[0].copy(), translations[0].copy()
+    new_rotation = np.empty((3, 3))
+    tables = (fixed_means, fixed_covariances, offsets, moving_covariances, centre, log_weights, screen, floor)
+    cost = _d2d_cost_at(*tables, rotation, translation, kept)
+    costs[0] = cost
+    iteration = 0
+    converged = False
+    while iteration < max_iter and not converged:
+        rotated, moved, moved_covariances = kept[0], kept[1], kept[2]
+        gradient, gauss_newton, exact = d2d_pose_derivatives(fixed_means, fixed_covariances, moved, rotated,
+                                                             moved_covariances, *kept[3:])
+        if not (np.isfinite(cost) and np.all(np.isfinite(gradient)) and np.all(np.isfinite(gauss_newton))):
+            return iteration, False, NOT_FINITE
+        newton = _cholesky(exact, factor)
+        hessian = exact if newton else gauss_newton
+        slope, length, new_cost, capped = 0.0, 1.0, cost, False
+        iteration += 1
+        found = False
+        while True:
+            _damped_step(hessian, gradient, damping, scratch, factor, step)
+            _capped(step, 1.0, scale, max_step, step)
+            converged = _step_size(step, scale) < tol
+            if converged:  # the pose moves by less than tol: no need to evaluate it
+                break
+            slope = gradient @ step
+            length = 1.0 if newton else over_relaxation
+            for attempt in range(backtracks + 1):  # the line search of solvers._line_search
+                capped = _capped(step, length, scale, max_step, move)
+                _turned(move[3:], rotation, new_rotation)
+                for a in range(3):
+                    new_translation[a] = translation[a] + move[a]
+                new_cost = _d2d_cost_at(*tables, new_rotation, new_translation, trial)
+                if new_cost <= cost:
+                    found = True
+                    break
+                if attempt < backtracks:
+                    curvature = new_cost - cost - slope * length
+                    length *= min(max(-slope * length / (2.0 * curvature), 0.1), 0.5) if curvature > 0 else 0.1
+            if found or damping > max_damping:
+                break
+            damping *= 10.0
+        if found:
+            rotation[:, :] = new_rotation
+            translation[:] = new_translation
+            kept, trial = trial, kept
+            if not newton:
+                over_relaxation = _next_over_relaxation(cost, slope, length, new_cost)
+            cost = new_cost
+            damping = max(damping / 10.0, min_damping)
+            converged = (newton and length == 1.0 and not capped
+                         and contraction * _step_size(step, scale) ** 2 < tol)
+        elif not converged:
+            return iteration, False, SEARCH_FAILED
+        rotations[iteration] = rotation
+        translations[iteration] = translation
+        costs[iteration] = cost
+    return iteration, converged, ENDED
