@@ -55,12 +55,14 @@ def test_screened_responsibilities_are_the_unscreened_ones_to_rounding(bunny_res
     assert np.abs(EStep(*params, screen=3).responsibilities(prims.means, prims.covariances) - reference).max() > 1e-3
 
 
-def test_a_primitives_sums_do_not_depend_on_its_block():
+@pytest.mark.parametrize("n_components", [40, 130])
+def test_a_primitives_sums_do_not_depend_on_its_block(n_components):
     """The fused kernel computes ``log rho`` a block of primitives at a time: each primitive alone (a block of one)
     gives its log-normaliser to the bit, and the block's M-step sums equal the sum of its primitives' alone to
-    rounding (and those of its kept pairs are numpy's)."""
+    rounding (and those of its kept pairs are numpy's); with more than 64 components the kept pairs span several
+    words of bits."""
     rng = np.random.default_rng(2)
-    n_rows, n_components = BLOCK + 5, 40
+    n_rows = BLOCK + 5
     features = np.column_stack([rng.normal(size=(n_rows, 10)), np.ones(n_rows)])
     coefficients = np.ascontiguousarray(rng.normal(scale=30.0, size=(11, n_components)))
     moments, row_weights = rng.normal(size=(n_rows, 10)), rng.random(n_rows)

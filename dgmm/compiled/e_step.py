@@ -18,6 +18,8 @@ import math
 
 import numba
 import numpy as np
+from numba.core import types
+from numba.extending import intrinsic
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
@@ -41,6 +43,15 @@ def exp_shifted_screened(log_rho, screen):
     return peak, total
 
 
+@intrinsic
+def _trailing_zeros(typingctx, mask):
+    """The index of the lowest set bit of a nonzero uint64 (LLVM's ``cttz``)."""
+    def codegen(context, builder, signature, args):
+        lowest = builder.cttz(args[0], context.get_constant(types.boolean, True))  # poison at 0: never called so
+        return builder.zext(lowest, context.get_value_type(types.int64))
+    return types.int64(types.uint64), codegen
+
+
 BLOCK = 32
 """Primitives whose ``log rho`` :func:`screened_e_step_sums` computes together: the loop over a block's primitives
 vectorises with each component's 11 coefficients held in registers (as the P2D cost's,
@@ -51,8 +62,10 @@ vectorises with each component's 11 coefficients held in registers (as the P2D c
 def screened_e_step_sums(features, coefficients, moments, row_weights, screen, log_norm):
     """One block of a screened fit's E-step fused with its M-step sums: ``log rho`` of every (component, primitive)
     pair, :data:`BLOCK` primitives at a time (summed in the coefficients' row order: a primitive's values do not
-    depend on its block), and each primitive's best; then primitive by primitive the exponentials of the pairs within
-    ``e^-screen`` of its best, its log-normaliser, and the kept pairs' responsibilities times its weighted moments.
+    depend on its block), each primitive's best, and the pairs within ``e^-screen`` of it as bits (a compare per
+    pair, no branch: on fr1/xyz frames a tenth less time than a branch per pair); then primitive by primitive, from
+    its set bits in order, the exponentials of those pairs, its log-normaliser, and the kept pairs'
+    responsibilities times its weighted moments.
 
     Parameters
     ----------
@@ -80,6 +93,7 @@ def screened_e_step_sums(features, coefficients, moments, row_weights, screen, l
     peaks = np.empty(BLOCK)
     terms = np.empty(n_components)
     kept = np.empty(n_components, dtype=np.int64)
+    bits = np.empty(((n_components + 63) // 64, BLOCK), dtype=np.uint64)
     row = np.empty(10)
     for first in range(0, n_rows, BLOCK):
         size = min(BLOCK, n_rows - first)
@@ -99,13 +113,20 @@ def screened_e_step_sums(features, coefficients, moments, row_weights, screen, l
         for k in range(n_components):
             for j in range(BLOCK):
                 peaks[j] = np.maximum(peaks[j], log_rho[k, j])  # vectorises; max() measured 3x slower
+        bits[:, :] = 0
+        for k in range(n_components):  # the pairs within the screen as bits, without a branch per pair
+            word, shift = k >> 6, np.uint64(k & 63)
+            for j in range(BLOCK):
+                bits[word, j] |= np.uint64(log_rho[k, j] - peaks[j] > -screen) << shift
         for j in range(size):
             peak = peaks[j]
             count = 0
-            for k in range(n_components):
-                if log_rho[k, j] - peak > -screen:
-                    kept[count] = k
+            for word in range(bits.shape[0]):  # the set bits in order: the kept components, ascending
+                mask = bits[word, j]
+                while mask:
+                    kept[count] = 64 * word + _trailing_zeros(mask)
                     count += 1
+                    mask &= mask - np.uint64(1)
             total = 0.0
             for i in range(count):
                 terms[i] = math.exp(log_rho[kept[i], j] - peak)
