@@ -19,7 +19,7 @@ import numpy as np
 from dgmm.gaussian import layout
 from dgmm.mixture import EStep, _moment_features
 from dgmm.odometry.overlap import centroid_and_radius
-from dgmm.registration import register_d2d
+from dgmm.registration import FittedMixture, register_d2d
 from dgmm.variants import VARIANTS
 
 _MIN_MASS = 1e-3
@@ -168,19 +168,13 @@ def unseen_sums(frame, rows):
 
 
 def _cut_mixture(frame, unseen):
-    """The frame's mixture cut to its seen primitives (:func:`cut`), components of weight 0 left out."""
+    """The frame's mixture cut to its seen primitives (:func:`cut`), components of weight 0 left out, as the
+    :class:`~dgmm.registration.fitted.FittedMixture` that D2D reads: its arrays are float64 of the right shapes
+    and its weights positive by construction, so D2D's input checks are skipped."""
     weights, means, covariances = cut(frame, unseen)
     keep = weights > 0
     precisions_cholesky = np.transpose(np.linalg.inv(np.linalg.cholesky(covariances[keep])), (0, 2, 1))
-    return _Fitted(weights[keep], means[keep], covariances[keep], precisions_cholesky)
-
-
-@dataclass(frozen=True)
-class _Fitted:
-    weights_: np.ndarray
-    means_: np.ndarray
-    covariances_: np.ndarray
-    precisions_cholesky_: np.ndarray
+    return FittedMixture(weights[keep], means[keep], covariances[keep], precisions_cholesky)
 
 
 def register_measured(fixed, moving, first, solver="gauss-newton", options=None):
