@@ -4,7 +4,7 @@ lifted centres and its argmin."""
 import numpy as np
 import pytest
 
-from dgmm.compiled.em_start import nearest_centres
+from dgmm.compiled.em_start import cluster_sums, nearest_centres
 from dgmm.odometry import CAMERAS, pixel_primitives, read_sequence
 from dgmm.odometry.em_start import kmeans_plusplus
 from dgmm.variants import VARIANTS
@@ -106,3 +106,15 @@ def test_seeds_on_fr1_samples_are_the_numpy_loops(variant, size):
         sample = np.random.default_rng(frame).choice(len(prims.means), 1024, replace=False)
         assert (kmeans_plusplus(prims.means[sample], weights[sample], 100, np.random.default_rng(frame))
                 == numpy_kmeans_plusplus(prims.means[sample], weights[sample], 100, np.random.default_rng(frame)))
+
+
+def test_cluster_sums_are_numpys_bincounts():
+    """Weights and weighted sums per cluster, bit for bit those of ``np.bincount`` (empty clusters 0)."""
+    rng = np.random.default_rng(3)
+    labels = rng.integers(0, 40, 5000)
+    labels[labels == 7] = 8  # an empty cluster
+    weights, values = rng.uniform(0.1, 2.0, 5000), rng.normal(size=(5000, 6))
+    mass, sums = cluster_sums(labels, weights, values, 41)
+    np.testing.assert_array_equal(mass, np.bincount(labels, weights, minlength=41))
+    for m in range(6):
+        np.testing.assert_array_equal(sums[:, m], np.bincount(labels, weights * values[:, m], minlength=41))

@@ -124,3 +124,29 @@ def greedy_seeds(points, norms, weights, closest, uniforms, chosen):
         chosen[seed] = candidates[best]
         for j in range(n_points):
             closest[j] = reach[best, j] if reach[best, j] >= 0.0 else 0.0  # np.maximum(reach[best], 0)
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def cluster_sums(labels, weights, values, n_clusters):
+    """Each cluster's weight and weighted sums of ``values``' columns, summed in the points' order as
+    ``np.bincount(labels, weights)`` and ``np.bincount(labels, weights * values[:, m])`` are, in one pass.
+
+    Parameters
+    ----------
+    labels : ndarray of int64, shape (n_points,)
+    weights : ndarray of shape (n_points,)
+    values : ndarray of shape (n_points, n_values)
+    n_clusters : int
+
+    Returns
+    -------
+    mass : ndarray of shape (n_clusters,)
+    sums : ndarray of shape (n_clusters, n_values)
+    """
+    mass, sums = np.zeros(n_clusters), np.zeros((n_clusters, values.shape[1]))
+    for i in range(len(labels)):
+        label, weight = labels[i], weights[i]
+        mass[label] += weight
+        for m in range(values.shape[1]):
+            sums[label, m] += weight * values[i, m]
+    return mass, sums

@@ -62,7 +62,7 @@ def lloyd_start(prims, n_components, seed_sample, lloyd_iter, variant, rng, reg_
     the primitives' means plus their own covariances, ``reg_covar`` on the diagonal), as ``GaussianMixture``'s
     k-means start does; an empty cluster gets the median covariance and a weight of ``1e-3 / K``.
     """
-    from dgmm.compiled.em_start import nearest_centres  # numba loads only for the sampled starts
+    from dgmm.compiled.em_start import cluster_sums, nearest_centres  # numba loads only for the sampled starts
     _, weights = VARIANTS[variant](prims.weights)
     points = prims.means
     sample = rng.choice(len(points), size=min(seed_sample, len(points)), replace=False)
@@ -72,14 +72,12 @@ def lloyd_start(prims, n_components, seed_sample, lloyd_iter, variant, rng, reg_
         # |x - c|² - |x|² = [x, 1] · [-2c, |c|²], the |x|² every point shares left out of the argmin
         lifted_centres = np.vstack([-2.0 * centres.T, np.sum(centres ** 2, axis=1)])
         labels = nearest_centres(coordinates, lifted_centres)
-        mass = np.bincount(labels, weights, minlength=n_components)
+        mass, sums = cluster_sums(labels, weights, points, n_components)
         present = mass > 0
-        sums = np.stack([np.bincount(labels, weights * points[:, d], minlength=n_components) for d in range(3)], 1)
         centres[present] = sums[present] / mass[present, None]
     offsets = points - centres[labels]
     moments = offsets[:, _ROWS] * offsets[:, _COLS] + prims.covariances[:, _ROWS, _COLS]
-    covariances = np.stack([np.bincount(labels, weights * moments[:, m], minlength=n_components)
-                            for m in range(6)], 1)[:, _FULL]
+    covariances = cluster_sums(labels, weights, moments, n_components)[1][:, _FULL]
     covariances[present] /= mass[present, None, None]
     if not present.all():
         covariances[~present] = np.median(covariances[present], axis=0)
