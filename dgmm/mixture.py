@@ -287,15 +287,26 @@ def _screened_block_sums(inputs, transposed_coefficients, rows, out):
                                 inputs.mstep_weights[rows], float(inputs.screen), inputs.log_norm[rows])
 
 
+def _screened_sums(inputs, transposed_coefficients, blocks):
+    """The M-step sums of a screened 3-D fit's E-step over every block: on ``blocks``' threads block by block, or
+    on one thread in one compiled call over the blocks that adds their sums in the same order
+    (:func:`dgmm.compiled.e_step.screened_e_step_block_sums`)."""
+    if blocks.threaded:
+        return blocks.run(functools.partial(_screened_block_sums, inputs, transposed_coefficients))
+    from dgmm.compiled.e_step import screened_e_step_block_sums  # numba loads only for screened fits
+    starts = np.array([rows.start for rows in blocks.blocks] + [blocks.blocks[-1].stop])
+    return screened_e_step_block_sums(inputs.features, transposed_coefficients, inputs.table[:, :-1],
+                                      inputs.mstep_weights, float(inputs.screen), inputs.log_norm, starts)
+
+
 def _e_step(inputs, params, blocks):
     """EM's E-step under ``params`` (weights, means, precision Choleskys in internal units), block by block: the
     M-step sums of its responsibilities and the bound (the size-weighted mean of the log-normalisers)."""
     coefficients = log_density_coefficients(*params, unit=inputs.unit)
     if inputs.screen is not None and coefficients.shape[1] == layout(3).n_columns:
-        block = functools.partial(_screened_block_sums, inputs, np.ascontiguousarray(coefficients.T))
+        sums = _screened_sums(inputs, np.ascontiguousarray(coefficients.T), blocks)
     else:
-        block = functools.partial(_block_sums, inputs, coefficients)
-    sums = blocks.run(block)
+        sums = blocks.run(functools.partial(_block_sums, inputs, coefficients))
     return sums, np.dot(inputs.mstep_weights, inputs.log_norm) / inputs.mstep_weights.sum()
 
 

@@ -140,3 +140,17 @@ def screened_e_step_sums(features, coefficients, moments, row_weights, screen, l
                 for c in range(10):
                     sums[k, c] += term * row[c]
     return sums
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def screened_e_step_block_sums(features, coefficients, moments, row_weights, screen, log_norm, starts):
+    """:func:`screened_e_step_sums` of every row block ``starts[b]:starts[b + 1]`` in turn, their sums added in block
+    order as :meth:`dgmm.em_blocks.BlockPass.run` adds them: the same sums to the bit, in one call where a call per
+    block cost a fit on one thread a twentieth of its time (an fr1/xyz frame: 27 blocks per E-step)."""
+    total = np.zeros((coefficients.shape[1], 10))
+    for block in range(len(starts) - 1):
+        rows = slice(starts[block], starts[block + 1])
+        part = screened_e_step_sums(features[rows], coefficients, moments[rows], row_weights[rows], screen,
+                                    log_norm[rows])
+        total = part if block == 0 else total + part
+    return total
