@@ -193,9 +193,13 @@ def _moment_features(means, covariances, centre, scale, unit=1.0, out=None):
     return features
 
 
-def _moment_table(prims, centre, unit):
+def _moment_table(prims, centre, unit, compiled=False):
     """:func:`_moment_features` (unscaled) of all ``prims``, built chunk by chunk so that its (n_prims, d, d)
-    temporaries never exist for all primitives at once."""
+    temporaries never exist for all primitives at once; with ``compiled`` (3-D: the screened fits, which load numba
+    anyway) in one compiled pass, the same values (:func:`dgmm.compiled.e_step.moment_table`)."""
+    if compiled:
+        from dgmm.compiled.e_step import moment_table  # numba loads only for screened fits
+        return moment_table(prims.means, prims.covariances, np.asarray(centre, dtype=float), float(unit))
     d = prims.dimension
     table = np.empty((len(prims), layout(d).n_columns))
     chunk = max(1, _TABLE_CHUNK * 9 // d**2)
@@ -727,7 +731,7 @@ class GaussianMixture(DensityMixin, BaseEstimator):
         self._check_parameters(prims)
         scale, mstep_weights = VARIANTS[self.variant](prims.weights)
         centre, unit = self._frame(prims, mstep_weights)
-        table = _moment_table(prims, centre, unit)
+        table = _moment_table(prims, centre, unit, compiled=self.screen is not None and prims.dimension == 3)
         inputs = _FitInputs(table, _scaled_table(table, scale), mstep_weights, unit, self.screen, np.empty(len(prims)))
         reg_covar = self.reg_covar / unit**2
         rng = np.random.default_rng(self.random_state)

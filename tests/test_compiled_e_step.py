@@ -102,3 +102,14 @@ def test_block_sums_in_one_call_are_the_blocks_added_in_order():
     sums = screened_e_step_block_sums(features, coefficients, table[:, :-1], row_weights, 50.0, log_norm, starts)
     np.testing.assert_array_equal(sums, expected)
     np.testing.assert_array_equal(log_norm, expected_log_norm)
+
+
+def test_moment_table_is_numpys_to_the_bit():
+    """The compiled moment table of 3-D primitives (a screened fit's) against the numpy one, every value."""
+    from dgmm.mixture import _moment_table
+
+    rng = np.random.default_rng(6)
+    factors = rng.normal(size=(500, 3, 3))
+    prims = Primitives(rng.normal(size=(500, 3)) * 3.0, factors @ factors.transpose(0, 2, 1), rng.random(500))
+    centre, unit = rng.normal(size=3), 0.5
+    np.testing.assert_array_equal(_moment_table(prims, centre, unit, compiled=True), _moment_table(prims, centre, unit))
