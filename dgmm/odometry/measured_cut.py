@@ -17,7 +17,7 @@ from functools import cached_property
 import numpy as np
 
 from dgmm.gaussian import layout
-from dgmm.mixture import EStep, _moment_features
+from dgmm.mixture import EStep
 from dgmm.odometry.overlap import centroid_and_radius
 from dgmm.registration import FittedMixture, register_d2d
 from dgmm.variants import VARIANTS
@@ -154,12 +154,12 @@ def unseen_sums(frame, rows):
     E-step's centre ``c`` in its unit ``u``: ``Σ r_pk a_p`` times the moment table's columns ``xx, yy, zz, 2xy, 2xz,
     2yz, x, y, z, 1`` of ``(x_p - c) / u`` (``C_p / u²`` on the second moments), shape (K, 10); one compiled pass
     (:func:`dgmm.compiled.e_step.screened_e_step_sums`, the fit's own E-step kernel, screened as the fit was)."""
-    from dgmm.compiled.e_step import screened_e_step_sums  # numba loads only for the schedules that cut
+    from dgmm.compiled.e_step import moment_table, screened_e_step_sums  # numba loads only for the schedules that cut
     e_step, coefficients = frame.last_e_step
     scale, mstep_weights = frame.variant_weights
     n_quadratic = layout(3).n_quadratic
-    moments = _moment_features(frame.primitives.means[rows], frame.primitives.covariances[rows], e_step.centre,
-                               None, e_step.unit)
+    moments = moment_table(frame.primitives.means[rows], frame.primitives.covariances[rows], e_step.centre,
+                           float(e_step.unit))  # mixture._moment_features' values, in one pass
     features = moments.copy()
     features[:, :n_quadratic] *= scale[rows, None]
     screen = np.inf if e_step.screen is None else float(e_step.screen)
