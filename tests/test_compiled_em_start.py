@@ -4,7 +4,7 @@ lifted centres and its argmin."""
 import numpy as np
 import pytest
 
-from dgmm.compiled.em_start import cluster_sums, nearest_centres
+from dgmm.compiled.em_start import cluster_scatters, cluster_sums, nearest_centres
 from dgmm.odometry import CAMERAS, pixel_primitives, read_sequence
 from dgmm.odometry.em_start import kmeans_plusplus
 from dgmm.variants import VARIANTS
@@ -118,3 +118,18 @@ def test_cluster_sums_are_numpys_bincounts():
     np.testing.assert_array_equal(mass, np.bincount(labels, weights, minlength=41))
     for m in range(6):
         np.testing.assert_array_equal(sums[:, m], np.bincount(labels, weights * values[:, m], minlength=41))
+
+
+def test_cluster_scatters_are_the_numpy_rows_bincounted():
+    """Each cluster's ``Σ w ((x - c)(x - c)ᵀ + C)`` entries, bit for bit the bincounts of numpy's rows
+    ``(x - c)_a (x - c)_b + C_ab`` as the numpy start summed them."""
+    rng = np.random.default_rng(4)
+    points, labels = rng.normal(size=(3000, 3)), rng.integers(0, 30, 3000)
+    centres, weights = rng.normal(size=(30, 3)), rng.uniform(0.1, 2.0, 3000)
+    factors = rng.normal(size=(3000, 3, 3))
+    covariances = factors @ factors.transpose(0, 2, 1)
+    rows, cols = np.array([0, 1, 2, 0, 0, 1]), np.array([0, 1, 2, 1, 2, 2])
+    offsets = points - centres[labels]
+    moments = offsets[:, rows] * offsets[:, cols] + covariances[:, rows, cols]
+    expected = np.stack([np.bincount(labels, weights * moments[:, m], minlength=30) for m in range(6)], 1)
+    np.testing.assert_array_equal(cluster_scatters(labels, weights, points, centres, covariances), expected)

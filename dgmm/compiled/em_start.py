@@ -150,3 +150,37 @@ def cluster_sums(labels, weights, values, n_clusters):
         for m in range(values.shape[1]):
             sums[label, m] += weight * values[i, m]
     return mass, sums
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def cluster_scatters(labels, weights, points, centres, covariances):
+    """Each cluster's weighted second moments about its centre, the 6 distinct entries ``xx, yy, zz, xy, xz, yz`` of
+    ``Σ w ((x - c)(x - c)ᵀ + C)``, summed as :func:`cluster_sums` sums the numpy rows ``(x - c)_a (x - c)_b + C_ab``
+    (the same values, without the (n_points, 6) table).
+
+    Parameters
+    ----------
+    labels : ndarray of int64, shape (n_points,)
+    weights : ndarray of shape (n_points,)
+    points : ndarray of shape (n_points, 3)
+    centres : ndarray of shape (n_clusters, 3)
+    covariances : ndarray of shape (n_points, 3, 3)
+        The points' own covariances ``C``.
+
+    Returns
+    -------
+    sums : ndarray of shape (n_clusters, 6)
+    """
+    sums = np.zeros((len(centres), 6))
+    for i in range(len(labels)):
+        label, weight = labels[i], weights[i]
+        x = points[i, 0] - centres[label, 0]
+        y = points[i, 1] - centres[label, 1]
+        z = points[i, 2] - centres[label, 2]
+        sums[label, 0] += weight * (x * x + covariances[i, 0, 0])
+        sums[label, 1] += weight * (y * y + covariances[i, 1, 1])
+        sums[label, 2] += weight * (z * z + covariances[i, 2, 2])
+        sums[label, 3] += weight * (x * y + covariances[i, 0, 1])
+        sums[label, 4] += weight * (x * z + covariances[i, 0, 2])
+        sums[label, 5] += weight * (y * z + covariances[i, 1, 2])
+    return sums

@@ -14,8 +14,7 @@ import numpy as np
 
 from dgmm.variants import VARIANTS
 
-_ROWS, _COLS = np.array([0, 1, 2, 0, 0, 1]), np.array([0, 1, 2, 1, 2, 2])  # the 6 distinct entries of a 3x3
-_FULL = np.array([[0, 3, 4], [3, 1, 5], [4, 5, 2]])  # each entry of the full 3x3 in those 6
+_FULL = np.array([[0, 3, 4], [3, 1, 5], [4, 5, 2]])  # each entry of a full 3x3 among xx, yy, zz, xy, xz, yz
 
 
 def kmeans_plusplus(points, weights, n_clusters, rng, n_trials=None):
@@ -62,7 +61,7 @@ def lloyd_start(prims, n_components, seed_sample, lloyd_iter, variant, rng, reg_
     the primitives' means plus their own covariances, ``reg_covar`` on the diagonal), as ``GaussianMixture``'s
     k-means start does; an empty cluster gets the median covariance and a weight of ``1e-3 / K``.
     """
-    from dgmm.compiled.em_start import cluster_sums, nearest_centres  # numba loads only for the sampled starts
+    from dgmm.compiled.em_start import cluster_scatters, cluster_sums, nearest_centres  # numba: sampled starts only
     _, weights = VARIANTS[variant](prims.weights)
     points = prims.means
     sample = rng.choice(len(points), size=min(seed_sample, len(points)), replace=False)
@@ -75,9 +74,7 @@ def lloyd_start(prims, n_components, seed_sample, lloyd_iter, variant, rng, reg_
         mass, sums = cluster_sums(labels, weights, points, n_components)
         present = mass > 0
         centres[present] = sums[present] / mass[present, None]
-    offsets = points - centres[labels]
-    moments = offsets[:, _ROWS] * offsets[:, _COLS] + prims.covariances[:, _ROWS, _COLS]
-    covariances = cluster_sums(labels, weights, moments, n_components)[1][:, _FULL]
+    covariances = cluster_scatters(labels, weights, points, centres, prims.covariances)[:, _FULL]
     covariances[present] /= mass[present, None, None]
     if not present.all():
         covariances[~present] = np.median(covariances[present], axis=0)
