@@ -97,6 +97,11 @@ class BlockPass:
         self._executor = None
         return self._stack.__exit__(*exc_info)
 
+    @property
+    def threaded(self):
+        """Whether :meth:`run` hands the blocks to threads (inside the context, with more than one)."""
+        return self._executor is not None
+
     def _buffer(self, rows):
         """This thread's (n_components, rows) block buffer, contiguous, allocated once (fresh pages cost as much
         as the products written into them)."""

@@ -193,9 +193,13 @@ def _moment_features(means, covariances, centre, scale, unit=1.0, out=None):
     return features
 
 
-def _moment_table(prims, centre, unit):
+def _moment_table(prims, centre, unit, compiled=False):
     """:func:`_moment_features` (unscaled) of all ``prims``, built chunk by chunk so that its (n_prims, d, d)
-    temporaries never exist for all primitives at once."""
+    temporaries never exist for all primitives at once; with ``compiled`` (3-D: the screened fits, which load numba
+    anyway) in one compiled pass, the same values (:func:`dgmm.compiled.e_step.moment_table`)."""
+    if compiled:
+        from dgmm.compiled.e_step import moment_table  # numba loads only for screened fits
+        return moment_table(prims.means, prims.covariances, np.asarray(centre, dtype=float), float(unit))
     d = prims.dimension
     table = np.empty((len(prims), layout(d).n_columns))
     chunk = max(1, _TABLE_CHUNK * 9 // d**2)
@@ -280,15 +284,26 @@ def _screened_block_sums(inputs, transposed_coefficients, rows, out):
                                 inputs.mstep_weights[rows], float(inputs.screen), inputs.log_norm[rows])
 
 
+def _screened_sums(inputs, transposed_coefficients, blocks):
+    """The M-step sums of a screened 3-D fit's E-step over every block: on ``blocks``' threads block by block, or
+    on one thread in one compiled call over the blocks that adds their sums in the same order
+    (:func:`dgmm.compiled.e_step.screened_e_step_block_sums`)."""
+    if blocks.threaded:
+        return blocks.run(functools.partial(_screened_block_sums, inputs, transposed_coefficients))
+    from dgmm.compiled.e_step import screened_e_step_block_sums  # numba loads only for screened fits
+    starts = np.array([rows.start for rows in blocks.blocks] + [blocks.blocks[-1].stop])
+    return screened_e_step_block_sums(inputs.features, transposed_coefficients, inputs.table[:, :-1],
+                                      inputs.mstep_weights, float(inputs.screen), inputs.log_norm, starts)
+
+
 def _e_step(inputs, params, blocks):
     """EM's E-step under ``params`` (weights, means, precision Choleskys in internal units), block by block: the
     M-step sums of its responsibilities and the bound (the size-weighted mean of the log-normalisers)."""
     coefficients = log_density_coefficients(*params, unit=inputs.unit)
     if inputs.screen is not None and coefficients.shape[1] == layout(3).n_columns:
-        block = functools.partial(_screened_block_sums, inputs, np.ascontiguousarray(coefficients.T))
+        sums = _screened_sums(inputs, np.ascontiguousarray(coefficients.T), blocks)
     else:
-        block = functools.partial(_block_sums, inputs, coefficients)
-    sums = blocks.run(block)
+        sums = blocks.run(functools.partial(_block_sums, inputs, coefficients))
     return sums, np.dot(inputs.mstep_weights, inputs.log_norm) / inputs.mstep_weights.sum()
 
 
@@ -723,7 +738,7 @@ class GaussianMixture(DensityMixin, BaseEstimator):
         self._check_parameters(prims)
         scale, mstep_weights = VARIANTS[self.variant](prims.weights)
         centre, unit = self._frame(prims, mstep_weights)
-        table = _moment_table(prims, centre, unit)
+        table = _moment_table(prims, centre, unit, compiled=self.screen is not None and prims.dimension == 3)
         inputs = _FitInputs(table, _scaled_table(table, scale), mstep_weights, unit, self.screen, np.empty(len(prims)))
         reg_covar = self.reg_covar / unit**2
         rng = np.random.default_rng(self.random_state)

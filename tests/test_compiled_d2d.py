@@ -8,6 +8,8 @@ from scipy.spatial.transform import Rotation
 from dgmm import registration as reg
 from dgmm.mixture import GaussianMixture
 from dgmm.registration import d2d
+from dgmm.registration.pose import pivot_pose
+from dgmm.registration.solvers import minimise_gauss_newton
 from dgmm.registration.fitted import FittedMixture
 
 
@@ -54,21 +56,43 @@ def test_derivatives_equal_the_numpy_reference(surface_mixtures):
             np.testing.assert_allclose(ours, theirs, rtol=0, atol=1e-12 * np.abs(theirs).max(), err_msg=name)
 
 
-def test_gauss_newton_poses_equal_the_numpy_path(surface_mixtures, monkeypatch):
-    """Odometry-sized motions (benchmarks/registration_speed.py's D2D: ±3°, ±0.005 per axis) of the moving
-    mixture: the compiled and the numpy costs end on the same poses to 1e-9 rad and 1e-9 m."""
-    fixed, moving = surface_mixtures
+def _moved_mixtures(moving):
+    """Odometry-sized motions (benchmarks/registration_speed.py's D2D: ±3°, ±0.005 per axis) of ``moving``."""
     trials = reg.random_trials(6, np.random.default_rng(4), reg.BUNNY_DIAGONAL, moving.centroid, max_angle_deg=3.0,
                                max_translation=0.005)
-    moved = [FittedMixture(moving.weights, trial.apply(moving.means),
-                           trial.rotation @ moving.covariances @ trial.rotation.T,
-                           np.linalg.inv(np.linalg.cholesky(trial.rotation @ moving.covariances @ trial.rotation.T))
-                           .transpose(0, 2, 1)) for trial in trials]
-    compiled = [reg.register_d2d(fixed, m, solver="gauss-newton") for m in moved]
-    original = d2d.d2d_pose_cost
-    monkeypatch.setattr(d2d, "d2d_pose_cost", lambda tables: original(tables, compiled=False))
-    for m, ours in zip(moved, compiled):
-        theirs = reg.register_d2d(fixed, m, solver="gauss-newton")
+    return [FittedMixture(moving.weights, trial.apply(moving.means),
+                          trial.rotation @ moving.covariances @ trial.rotation.T,
+                          np.linalg.inv(np.linalg.cholesky(trial.rotation @ moving.covariances @ trial.rotation.T))
+                          .transpose(0, 2, 1)) for trial in trials]
+
+
+def test_gauss_newton_poses_equal_the_numpy_path(surface_mixtures):
+    """The compiled loop and the numpy cost under the Python loop end on the same poses to 1e-9 rad and 1e-9 m."""
+    fixed, moving = surface_mixtures
+    for m in _moved_mixtures(moving):
+        ours = reg.register_d2d(fixed, m, solver="gauss-newton")
+        theirs = reg.register_d2d(fixed, m, solver="gauss-newton", compiled=False)
         assert np.radians(reg.rotation_distance_deg(ours.rotation, theirs.rotation)) < 1e-9
         assert np.abs(ours.translation - theirs.translation).max() < 1e-9
         assert ours.iterations == theirs.iterations
+
+
+def test_compiled_loop_takes_the_python_loops_steps(surface_mixtures):
+    """The compiled loop (dgmm.compiled.registration.d2d_gauss_newton) against the Python loop on the same kernels
+    (solvers.minimise_gauss_newton on d2d_pose_cost), from a start off the optimum: every kept step's pose and cost to
+    rounding, and the same number of iterations."""
+    fixed, moving = surface_mixtures
+    for m in _moved_mixtures(moving)[:3]:
+        start = Rotation.from_rotvec([0.02, -0.01, 0.015]).as_matrix(), np.array([0.003, -0.002, 0.001])
+        steps = {"ours": [], "theirs": []}
+        ours = reg.register_d2d(fixed, m, *start, solver="gauss-newton",
+                                callback=lambda i, r: steps["ours"].append(r))
+        tables = d2d.PairTables.of(fixed, m, m.centroid)
+        radius = np.sqrt(m.weights @ np.sum((m.means - m.centroid) ** 2, axis=1))
+        theirs = minimise_gauss_newton("d2d", d2d.d2d_pose_cost(tables), m.centroid, radius,
+                                       *pivot_pose(*start, m.centroid), lambda i, r: steps["theirs"].append(r), None)
+        assert ours.iterations == theirs.iterations > 2
+        for a, b in zip(steps["ours"] + [ours], steps["theirs"] + [theirs], strict=True):
+            np.testing.assert_allclose(a.rotation, b.rotation, rtol=0, atol=1e-13)
+            np.testing.assert_allclose(a.translation, b.translation, rtol=0, atol=1e-13)
+            assert a.objective == pytest.approx(b.objective, rel=1e-13)

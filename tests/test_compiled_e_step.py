@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from dgmm import GaussianMixture, Primitives
-from dgmm.compiled.e_step import BLOCK, exp_shifted_screened, screened_e_step_sums
+from dgmm.compiled.e_step import BLOCK, exp_shifted_screened, screened_e_step_block_sums, screened_e_step_sums
 from dgmm.mixture import EStep
 
 
@@ -55,12 +55,14 @@ def test_screened_responsibilities_are_the_unscreened_ones_to_rounding(bunny_res
     assert np.abs(EStep(*params, screen=3).responsibilities(prims.means, prims.covariances) - reference).max() > 1e-3
 
 
-def test_a_primitives_sums_do_not_depend_on_its_block():
+@pytest.mark.parametrize("n_components", [40, 130])
+def test_a_primitives_sums_do_not_depend_on_its_block(n_components):
     """The fused kernel computes ``log rho`` a block of primitives at a time: each primitive alone (a block of one)
     gives its log-normaliser to the bit, and the block's M-step sums equal the sum of its primitives' alone to
-    rounding (and those of its kept pairs are numpy's)."""
+    rounding (and those of its kept pairs are numpy's); with more than 64 components the kept pairs span several
+    words of bits."""
     rng = np.random.default_rng(2)
-    n_rows, n_components = BLOCK + 5, 40
+    n_rows = BLOCK + 5
     features = np.column_stack([rng.normal(size=(n_rows, 10)), np.ones(n_rows)])
     coefficients = np.ascontiguousarray(rng.normal(scale=30.0, size=(11, n_components)))
     moments, row_weights = rng.normal(size=(n_rows, 10)), rng.random(n_rows)
@@ -79,3 +81,35 @@ def test_a_primitives_sums_do_not_depend_on_its_block():
     expected = (rho * (row_weights / rho.sum(axis=1))[:, None]).T @ moments
     np.testing.assert_allclose(sums, expected, rtol=0, atol=1e-12 * np.abs(expected).max())
     np.testing.assert_allclose(log_norm, np.log(rho.sum(axis=1)) + log_rho.max(axis=1), rtol=1e-14)
+
+
+def test_block_sums_in_one_call_are_the_blocks_added_in_order():
+    """The one-call kernel over row blocks gives, to the bit, the log-normalisers and the sums of a call per block
+    added in block order (BlockPass.run's order)."""
+    rng = np.random.default_rng(5)
+    n_rows, n_components = 3 * BLOCK + 11, 70
+    features = np.column_stack([rng.normal(size=(n_rows, 10)), np.ones(n_rows)])
+    coefficients = np.ascontiguousarray(rng.normal(scale=30.0, size=(11, n_components)))
+    table = np.column_stack([rng.normal(size=(n_rows, 10)), np.ones(n_rows)])
+    row_weights = rng.random(n_rows)
+    starts = np.array([0, 40, 41, 90, n_rows])
+    log_norm, expected_log_norm = np.empty(n_rows), np.empty(n_rows)
+    expected = None
+    for start, stop in zip(starts[:-1], starts[1:]):
+        part = screened_e_step_sums(features[start:stop], coefficients, table[start:stop, :-1],
+                                    row_weights[start:stop], 50.0, expected_log_norm[start:stop])
+        expected = part if expected is None else expected + part
+    sums = screened_e_step_block_sums(features, coefficients, table[:, :-1], row_weights, 50.0, log_norm, starts)
+    np.testing.assert_array_equal(sums, expected)
+    np.testing.assert_array_equal(log_norm, expected_log_norm)
+
+
+def test_moment_table_is_numpys_to_the_bit():
+    """The compiled moment table of 3-D primitives (a screened fit's) against the numpy one, every value."""
+    from dgmm.mixture import _moment_table
+
+    rng = np.random.default_rng(6)
+    factors = rng.normal(size=(500, 3, 3))
+    prims = Primitives(rng.normal(size=(500, 3)) * 3.0, factors @ factors.transpose(0, 2, 1), rng.random(500))
+    centre, unit = rng.normal(size=3), 0.5
+    np.testing.assert_array_equal(_moment_table(prims, centre, unit, compiled=True), _moment_table(prims, centre, unit))

@@ -12,7 +12,8 @@
   before computing the ones that may matter, then works on arrays of a few hundred to a few thousand pairs, and at
   odometry's sizes (K = 100 per frame) its time goes to numpy's per-call overhead. Here every pair's exact term is
   computed in one pass (about 50 floating-point operations a pair), and the derivatives run over the pairs within
-  ``e^-screen`` of the largest term, the pairs the numpy derivatives keep.
+  ``e^-screen`` of the largest term, the pairs the numpy derivatives keep. Gauss-Newton's whole loop runs here too
+  (:func:`d2d_gauss_newton`), as P2D's.
 
 The numpy functions stay the reference (``p2d_pose_cost(compiled=False)``, ``p2d_params_cost(compiled=False)``,
 ``d2d_pose_cost(compiled=False)``, tested against these). The kernels and the 3x3 helpers they call live in this one
@@ -26,15 +27,7 @@ import math
 import numba
 import numpy as np
 
-# ---- 3x3 helpers, and the pose matrices Σ Jᵀ W J over (δ, ω), J = [I, -[p]x] (solvers.pose_matrices')
-
-@numba.njit(cache=True, nogil=True, error_model="numpy")
-def _skew(a, out):
-    """``[a]x`` into ``out`` (3, 3)."""
-    out[0, 0], out[0, 1], out[0, 2] = 0.0, -a[2], a[1]
-    out[1, 0], out[1, 1], out[1, 2] = a[2], 0.0, -a[0]
-    out[2, 0], out[2, 1], out[2, 2] = -a[1], a[0], 0.0
-
+# ---- 3x3 helpers
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
 def _product(x, y, out):
@@ -42,20 +35,6 @@ def _product(x, y, out):
     for a in range(3):
         for b in range(3):
             out[a, b] = x[a, 0] * y[0, b] + x[a, 1] * y[1, b] + x[a, 2] * y[2, b]
-
-
-@numba.njit(cache=True, nogil=True, error_model="numpy")
-def _add_pose_matrix(skew_p, weight, scale, cross, out):
-    """``out += scale Jᵀ W J`` (6, 6) for a symmetric ``W`` (3, 3), ``J = [I, -[p]x]`` and ``skew_p = [p]x``: the
-    blocks ``W``, ``-W [p]x`` and its transpose, ``-[p]x W [p]x``; ``cross`` (3, 3) is scratch for ``W [p]x``."""
-    _product(weight, skew_p, cross)
-    for r in range(3):
-        for s in range(3):
-            out[r, s] += scale * weight[r, s]
-            out[r, 3 + s] -= scale * cross[r, s]
-            out[3 + s, r] -= scale * cross[r, s]
-            out[3 + r, 3 + s] -= scale * (skew_p[r, 0] * cross[0, s] + skew_p[r, 1] * cross[1, s]
-                                          + skew_p[r, 2] * cross[2, s])
 
 
 # ---- P2D
@@ -205,7 +184,7 @@ def _pair_gradient(precisions, precision_means, k, d0, d1, d2):
 def _add_pose_blocks(a00, a01, a02, a11, a12, a22, p, out):
     """``out += `` the distinct entries of ``Jᵀ A J`` (6, 6) for a symmetric ``A``, ``J = [I, -[p]x]``: ``A``'s
     upper triangle (6), ``-A [p]x`` (9, row-major) and ``-[p]x A [p]x``'s upper triangle (6), into ``out`` (21,)
-    (:func:`_pose_matrix` unpacks them). Where :func:`_add_pose_matrix` updates 36 entries from a 3x3 product, this
+    (:func:`_pose_matrix` unpacks them). Where an update of the 36 entries from a 3x3 product (as D2D's) would, this
     takes 30 products into 21 sums: the Gauss-Newton derivatives' per-point cost."""
     p0, p1, p2 = p[0], p[1], p[2]
     # B = A [p]x, column by column: [p]x's columns are (0, p2, -p1), (-p2, 0, p0), (p1, -p0, 0)
@@ -666,12 +645,30 @@ def d2d_negative_overlap(fixed_means, fixed_covariances, moved, moved_covariance
     return cost
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
-def _add_transposed_product(weight, x, y, out):
-    """``out += weight xᵀ y`` for 3x3 ``x`` and ``y``."""
+@numba.njit(inline="always")
+def _skew_t(a0, a1, a2):
+    """``[a]x`` as a row-major 9-tuple: the D2D derivatives' 3x3 matrices are tuples, which stay in registers
+    where scratch arrays were stored and reloaded at every pair (their kernel took half the time so)."""
+    return (0.0, -a2, a1, a2, 0.0, -a0, -a1, a0, 0.0)
+
+
+@numba.njit(inline="always")
+def _product_t(x, y):
+    """``x y`` of row-major 9-tuples, each entry summed in :func:`_product`'s order."""
+    return (x[0] * y[0] + x[1] * y[3] + x[2] * y[6], x[0] * y[1] + x[1] * y[4] + x[2] * y[7],
+            x[0] * y[2] + x[1] * y[5] + x[2] * y[8],
+            x[3] * y[0] + x[4] * y[3] + x[5] * y[6], x[3] * y[1] + x[4] * y[4] + x[5] * y[7],
+            x[3] * y[2] + x[4] * y[5] + x[5] * y[8],
+            x[6] * y[0] + x[7] * y[3] + x[8] * y[6], x[6] * y[1] + x[7] * y[4] + x[8] * y[7],
+            x[6] * y[2] + x[7] * y[5] + x[8] * y[8])
+
+
+@numba.njit(inline="always")
+def _add_transposed_product_t(weight, x, y, out):
+    """``out += weight xᵀ y`` (3, 3) for row-major 9-tuples ``x`` and ``y``."""
     for a in range(3):
         for b in range(3):
-            out[a, b] += weight * (x[0, a] * y[0, b] + x[1, a] * y[1, b] + x[2, a] * y[2, b])
+            out[a, b] += weight * (x[a] * y[b] + x[3 + a] * y[3 + b] + x[6 + a] * y[6 + b])
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
@@ -691,51 +688,185 @@ def d2d_pose_derivatives(fixed_means, fixed_covariances, moved, rotated, moved_c
     gauss_newton, spread = np.zeros((6, 6)), np.zeros((6, 6))
     second = np.zeros((3, 3))
     mixed, spin, across = np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3))
-    inverse, y, v, cv, arm, grad_log = np.empty((3, 3)), np.empty(3), np.empty(3), np.empty(3), np.empty(3), \
-        np.empty(6)
-    skew_v, skew_cv, skew_p = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
-    c_skew_v, u, inverse_u, cross = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
     for pair in range(count[0]):
         i, j = fixed_index[pair], moving_index[pair]
-        c, p = moved_covariances[j], rotated[j]
-        for r in range(3):
-            y[r] = fixed_means[i, r] - moved[j, r]
-        _inverse_and_exponent(fixed_covariances[i], c, y, inverse)
+        f, cm = fixed_covariances[i], moved_covariances[j]
+        c = (cm[0, 0], cm[0, 1], cm[0, 2], cm[1, 0], cm[1, 1], cm[1, 2], cm[2, 0], cm[2, 1], cm[2, 2])
+        p0, p1, p2 = rotated[j, 0], rotated[j, 1], rotated[j, 2]
+        y0, y1, y2 = fixed_means[i, 0] - moved[j, 0], fixed_means[i, 1] - moved[j, 1], fixed_means[i, 2] - moved[j, 2]
+        # S⁻¹ by its adjugate, as _inverse_and_exponent (the cost's kernel)
+        a, b, cc = f[0, 0] + cm[0, 0], f[1, 1] + cm[1, 1], f[2, 2] + cm[2, 2]
+        d, e, g = f[0, 1] + cm[0, 1], f[0, 2] + cm[0, 2], f[1, 2] + cm[1, 2]
+        axx, ayy, azz = b * cc - g * g, a * cc - e * e, a * b - d * d
+        axy, axz, ayz = e * g - d * cc, d * g - b * e, d * e - a * g
+        determinant = a * axx + d * axy + e * axz
+        i00, i11, i22 = axx / determinant, ayy / determinant, azz / determinant
+        i01, i02, i12 = axy / determinant, axz / determinant, ayz / determinant
+        inverse = (i00, i01, i02, i01, i11, i12, i02, i12, i22)
         term = math.exp(log_terms[pair])
-        for r in range(3):
-            v[r] = inverse[r, 0] * y[0] + inverse[r, 1] * y[1] + inverse[r, 2] * y[2]
-        for r in range(3):
-            cv[r] = c[r, 0] * v[0] + c[r, 1] * v[1] + c[r, 2] * v[2]
-            arm[r] = p[r] + cv[r]
-        for r in range(3):
-            grad_log[r] = v[r]
-            grad_log[3 + r] = arm[(r + 1) % 3] * v[(r + 2) % 3] - arm[(r + 2) % 3] * v[(r + 1) % 3]  # (p + Cv) x v
+        v0 = i00 * y0 + i01 * y1 + i02 * y2
+        v1 = i01 * y0 + i11 * y1 + i12 * y2
+        v2 = i02 * y0 + i12 * y1 + i22 * y2
+        cv0 = c[0] * v0 + c[1] * v1 + c[2] * v2
+        cv1 = c[3] * v0 + c[4] * v1 + c[5] * v2
+        cv2 = c[6] * v0 + c[7] * v1 + c[8] * v2
+        arm0, arm1, arm2 = p0 + cv0, p1 + cv1, p2 + cv2
+        grad_log = (v0, v1, v2, arm1 * v2 - arm2 * v1, arm2 * v0 - arm0 * v2, arm0 * v1 - arm1 * v0)
         for r in range(6):
             gradient[r] -= term * grad_log[r]
             for s in range(6):
                 spread[r, s] += term * grad_log[r] * grad_log[s]
-        _skew(p, skew_p)
-        _add_pose_matrix(skew_p, inverse, term, cross, gauss_newton)  # Σ term Jᵀ S⁻¹ J, as pose_matrices
-        _skew(v, skew_v)
-        _skew(cv, skew_cv)
-        _product(c, skew_v, c_skew_v)
+        skew_p = _skew_t(p0, p1, p2)
+        cross = _product_t(inverse, skew_p)  # Σ term Jᵀ S⁻¹ J (J = [I, -[p]x]), as solvers.pose_matrices
         for r in range(3):
             for s in range(3):
-                u[r, s] = c_skew_v[r, s] - skew_cv[r, s]
-        _product(inverse, u, inverse_u)
-        _add_transposed_product(term, skew_v, c_skew_v, second)
-        _add_transposed_product(-term, u, inverse_u, second)
-        _add_transposed_product(term, inverse_u, skew_p, mixed)
+                gauss_newton[r, s] += term * inverse[3 * r + s]
+                gauss_newton[r, 3 + s] -= term * cross[3 * r + s]
+                gauss_newton[3 + s, r] -= term * cross[3 * r + s]
+                gauss_newton[3 + r, 3 + s] -= term * (skew_p[3 * r] * cross[s] + skew_p[3 * r + 1] * cross[3 + s]
+                                                      + skew_p[3 * r + 2] * cross[6 + s])
+        skew_v = _skew_t(v0, v1, v2)
+        skew_cv = _skew_t(cv0, cv1, cv2)
+        c_skew_v = _product_t(c, skew_v)
+        u = (c_skew_v[0] - skew_cv[0], c_skew_v[1] - skew_cv[1], c_skew_v[2] - skew_cv[2],
+             c_skew_v[3] - skew_cv[3], c_skew_v[4] - skew_cv[4], c_skew_v[5] - skew_cv[5],
+             c_skew_v[6] - skew_cv[6], c_skew_v[7] - skew_cv[7], c_skew_v[8] - skew_cv[8])
+        inverse_u = _product_t(inverse, u)
+        _add_transposed_product_t(term, skew_v, c_skew_v, second)
+        _add_transposed_product_t(-term, u, inverse_u, second)
+        _add_transposed_product_t(term, inverse_u, skew_p, mixed)
+        arm = (arm0, arm1, arm2)
+        v = (v0, v1, v2)
         for r in range(3):
             for s in range(3):
                 spin[r, s] += term * v[r] * arm[s]
-                across[r, s] += term * inverse_u[r, s]
+                across[r, s] += term * inverse_u[3 * r + s]
     exact = gauss_newton - spread
     trace = spin[0, 0] + spin[1, 1] + spin[2, 2]
     for r in range(3):
         for s in range(3):
             exact[3 + r, 3 + s] -= (second[r, s] + mixed[r, s] + mixed[s, r] + 0.5 * (spin[r, s] + spin[s, r])
                                     - (trace if r == s else 0.0))
-            exact[3 + r, s] += across[s, r]  # second[3:, :3] = -(Σ term S⁻¹ U)ᵀ
+            exact[3 + r, s] += across[s, r]
             exact[s, 3 + r] += across[s, r]
     return gradient, gauss_newton, exact
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _d2d_pose_buffers(n_fixed, n_moving):
+    """:func:`d2d_gauss_newton`'s buffers for one pose: ``(rotated (n_moving, 3), moved (n_moving, 3),
+    moved_covariances (n_moving, 3, 3))`` and :func:`d2d_kept_pairs`' ``(count, fixed index, moving index, log
+    terms)``."""
+    size = n_fixed * n_moving
+    return (np.empty((n_moving, 3)), np.empty((n_moving, 3)), np.empty((n_moving, 3, 3)), np.zeros(1, dtype=np.int64),
+            np.empty(size, dtype=np.int64), np.empty(size, dtype=np.int64), np.empty(size))
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _d2d_cost_at(fixed_means, fixed_covariances, offsets, moving_covariances, centre, log_weights, screen, floor,
+                 rotation, translation, buffers):
+    """The D2D cost at the pose ``(R, t')`` (:func:`d2d_negative_overlap`), the moving mixture moved into
+    ``buffers``: ``p = R (μⱼ - c)``, ``p + c + t'`` and ``R Σⱼ Rᵀ``."""
+    rotated, moved, moved_covariances, count, fixed_index, moving_index, log_terms = buffers
+    turned = np.empty((3, 3))
+    for j in range(offsets.shape[0]):
+        for a in range(3):
+            rotated[j, a] = (rotation[a, 0] * offsets[j, 0] + rotation[a, 1] * offsets[j, 1]
+                             + rotation[a, 2] * offsets[j, 2])
+            moved[j, a] = rotated[j, a] + centre[a] + translation[a]
+        _product(rotation, moving_covariances[j], turned)
+        for a in range(3):
+            for b in range(3):
+                moved_covariances[j, a, b] = (turned[a, 0] * rotation[b, 0] + turned[a, 1] * rotation[b, 1]
+                                              + turned[a, 2] * rotation[b, 2])
+    return d2d_negative_overlap(fixed_means, fixed_covariances, moved, moved_covariances, log_weights, screen, floor,
+                                count, fixed_index, moving_index, log_terms)
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def d2d_gauss_newton(fixed_means, fixed_covariances, offsets, moving_covariances, centre, log_weights, screen, floor,
+                     scale, max_iter, tol, damping, max_step, constants, rotations, translations, costs):
+    """:func:`dgmm.registration.solvers.minimise_gauss_newton` on the D2D kernels, from the pose ``rotations[0]``,
+    ``translations[0]`` (the moving means ``μⱼ -> R (μⱼ - c) + c + t'``): the steps of :func:`p2d_gauss_newton`,
+    with no Python between the kernels.
+
+    Parameters
+    ----------
+    fixed_means, fixed_covariances, log_weights, screen, floor
+        As :func:`d2d_negative_overlap` takes them.
+    offsets : ndarray of shape (n_moving, 3)
+        ``μⱼ - c``.
+    moving_covariances : ndarray of shape (n_moving, 3, 3)
+    centre : ndarray of shape (3,)
+        ``c``.
+    scale, max_iter, tol, damping, max_step, constants, rotations, translations, costs
+        As :func:`p2d_gauss_newton` takes them.
+
+    Returns
+    -------
+    iterations, converged, status
+        As :func:`p2d_gauss_newton`'s.
+    """
+    over_relaxation, contraction, min_damping, max_damping, backtracks = constants
+    n_fixed, n_moving = fixed_means.shape[0], offsets.shape[0]
+    kept = _d2d_pose_buffers(n_fixed, n_moving)
+    trial = _d2d_pose_buffers(n_fixed, n_moving)
+    scratch, factor = np.empty((6, 6)), np.zeros((6, 6))
+    step, move, new_translation = np.empty(6), np.empty(6), np.empty(3)
+    rotation, translation = rotations[0].copy(), translations[0].copy()
+    new_rotation = np.empty((3, 3))
+    tables = (fixed_means, fixed_covariances, offsets, moving_covariances, centre, log_weights, screen, floor)
+    cost = _d2d_cost_at(*tables, rotation, translation, kept)
+    costs[0] = cost
+    iteration = 0
+    converged = False
+    while iteration < max_iter and not converged:
+        rotated, moved, moved_covariances = kept[0], kept[1], kept[2]
+        gradient, gauss_newton, exact = d2d_pose_derivatives(fixed_means, fixed_covariances, moved, rotated,
+                                                             moved_covariances, *kept[3:])
+        if not (np.isfinite(cost) and np.all(np.isfinite(gradient)) and np.all(np.isfinite(gauss_newton))):
+            return iteration, False, NOT_FINITE
+        newton = _cholesky(exact, factor)
+        hessian = exact if newton else gauss_newton
+        slope, length, new_cost, capped = 0.0, 1.0, cost, False
+        iteration += 1
+        found = False
+        while True:
+            _damped_step(hessian, gradient, damping, scratch, factor, step)
+            _capped(step, 1.0, scale, max_step, step)
+            converged = _step_size(step, scale) < tol
+            if converged:  # the pose moves by less than tol: no need to evaluate it
+                break
+            slope = gradient @ step
+            length = 1.0 if newton else over_relaxation
+            for attempt in range(backtracks + 1):  # the line search of solvers._line_search
+                capped = _capped(step, length, scale, max_step, move)
+                _turned(move[3:], rotation, new_rotation)
+                for a in range(3):
+                    new_translation[a] = translation[a] + move[a]
+                new_cost = _d2d_cost_at(*tables, new_rotation, new_translation, trial)
+                if new_cost <= cost:
+                    found = True
+                    break
+                if attempt < backtracks:
+                    curvature = new_cost - cost - slope * length
+                    length *= min(max(-slope * length / (2.0 * curvature), 0.1), 0.5) if curvature > 0 else 0.1
+            if found or damping > max_damping:
+                break
+            damping *= 10.0
+        if found:
+            rotation[:, :] = new_rotation
+            translation[:] = new_translation
+            kept, trial = trial, kept
+            if not newton:
+                over_relaxation = _next_over_relaxation(cost, slope, length, new_cost)
+            cost = new_cost
+            damping = max(damping / 10.0, min_damping)
+            converged = (newton and length == 1.0 and not capped
+                         and contraction * _step_size(step, scale) ** 2 < tol)
+        elif not converged:
+            return iteration, False, SEARCH_FAILED
+        rotations[iteration] = rotation
+        translations[iteration] = translation
+        costs[iteration] = cost
+    return iteration, converged, ENDED

@@ -2,9 +2,10 @@
 iterations on all of them, and the hard-label M-step (paper §VI-D does not state the start; see
 :mod:`dgmm.odometry.frame_model`).
 
-Both steps are written out in numpy for speed: scikit-learn's ``kmeans_plusplus`` spends nearly all of its time
-per frame validating its inputs once per seed, several times what the same greedy algorithm costs here; a Lloyd
-pass's distances are one matrix product of the points with a column of ones against the centres (measured:
+Both steps are compiled (:mod:`dgmm.compiled.em_start`): scikit-learn's ``kmeans_plusplus`` spends nearly all
+of its time per frame validating its inputs once per seed, and the same greedy algorithm in numpy spent its time
+in numpy's per-call overhead. The kernels round every distance and potential as the numpy steps they replaced did
+(numpy's BLAS products), so they pick the same seeds and labels, rounding ties and all (measured:
 docs/studies/odometry_constants.md).
 """
 from __future__ import annotations
@@ -13,11 +14,7 @@ import numpy as np
 
 from dgmm.variants import VARIANTS
 
-_ROWS, _COLS = np.array([0, 1, 2, 0, 0, 1]), np.array([0, 1, 2, 1, 2, 2])  # the 6 distinct entries of a 3x3
-_LABEL_BLOCK_BYTES = 2**19
-"""A Lloyd pass labels the primitives in blocks whose distances take this many bytes: they stay in the CPU's cache
-between the product and the argmin (measured: docs/studies/odometry_constants.md)."""
-_FULL = np.array([[0, 3, 4], [3, 1, 5], [4, 5, 2]])  # each entry of the full 3x3 in those 6
+_FULL = np.array([[0, 3, 4], [3, 1, 5], [4, 5, 2]])  # each entry of a full 3x3 among xx, yy, zz, xy, xz, yz
 
 
 def kmeans_plusplus(points, weights, n_clusters, rng, n_trials=None):
@@ -42,21 +39,17 @@ def kmeans_plusplus(points, weights, n_clusters, rng, n_trials=None):
     indices : list of int
         The seeds' rows of ``points``.
     """
+    from dgmm.compiled.em_start import greedy_seeds  # numba loads only for the sampled starts
     n_trials = 2 + int(np.log(n_clusters)) if n_trials is None else n_trials
     points = points - points.mean(axis=0)  # |x - c|² by its expansion below loses less about the centre
     norms = np.einsum("ij,ij->i", points, points)
-    chosen = [rng.choice(len(points), p=weights / weights.sum())]
+    chosen = np.empty(n_clusters, dtype=np.int64)
+    chosen[0] = rng.choice(len(points), p=weights / weights.sum())
     closest = np.maximum(norms + norms[chosen[0]] - 2.0 * points @ points[chosen[0]], 0.0)
-    for _ in range(1, n_clusters):  # sequential by nature: each seed depends on the ones before
-        cumulative = np.cumsum(weights * closest)
-        candidates = np.minimum(np.searchsorted(cumulative, rng.random(n_trials) * cumulative[-1]), len(points) - 1)
-        reach = norms[candidates, None] - 2.0 * points[candidates] @ points.T
-        reach += norms
-        np.minimum(closest, reach, out=reach)
-        best = int(np.argmin(reach @ weights))
-        chosen.append(int(candidates[best]))
-        closest = np.maximum(reach[best], 0.0)
-    return chosen
+    # every candidate's uniform drawn at once: the generator's stream, seed after seed, as drawn one seed at a time
+    greedy_seeds(points, norms, np.ascontiguousarray(weights, dtype=float), closest,
+                 rng.random((n_clusters - 1, n_trials)), chosen)
+    return chosen.tolist()
 
 
 def lloyd_start(prims, n_components, seed_sample, lloyd_iter, variant, rng, reg_covar):
@@ -68,25 +61,20 @@ def lloyd_start(prims, n_components, seed_sample, lloyd_iter, variant, rng, reg_
     the primitives' means plus their own covariances, ``reg_covar`` on the diagonal), as ``GaussianMixture``'s
     k-means start does; an empty cluster gets the median covariance and a weight of ``1e-3 / K``.
     """
+    from dgmm.compiled.em_start import cluster_scatters, cluster_sums, nearest_centres  # numba: sampled starts only
     _, weights = VARIANTS[variant](prims.weights)
     points = prims.means
     sample = rng.choice(len(points), size=min(seed_sample, len(points)), replace=False)
     centres = points[sample[kmeans_plusplus(points[sample], weights[sample], n_components, rng)]]
-    lifted = np.hstack([points, np.ones((len(points), 1))])
-    rows = max(1, _LABEL_BLOCK_BYTES // (8 * n_components))
+    coordinates = np.ascontiguousarray(points.T)
     for _ in range(lloyd_iter + 1):  # the last pass only labels
-        # |x - c|² - |x|² = [x, 1] · [-2c, |c|²]: one product, the |x|² every row shares left out of the argmin
+        # |x - c|² - |x|² = [x, 1] · [-2c, |c|²], the |x|² every point shares left out of the argmin
         lifted_centres = np.vstack([-2.0 * centres.T, np.sum(centres ** 2, axis=1)])
-        labels = np.concatenate([(lifted[start:start + rows] @ lifted_centres).argmin(axis=1)
-                                 for start in range(0, len(points), rows)])
-        mass = np.bincount(labels, weights, minlength=n_components)
+        labels = nearest_centres(coordinates, lifted_centres)
+        mass, sums = cluster_sums(labels, weights, points, n_components)
         present = mass > 0
-        sums = np.stack([np.bincount(labels, weights * points[:, d], minlength=n_components) for d in range(3)], 1)
         centres[present] = sums[present] / mass[present, None]
-    offsets = points - centres[labels]
-    moments = offsets[:, _ROWS] * offsets[:, _COLS] + prims.covariances[:, _ROWS, _COLS]
-    covariances = np.stack([np.bincount(labels, weights * moments[:, m], minlength=n_components)
-                            for m in range(6)], 1)[:, _FULL]
+    covariances = cluster_scatters(labels, weights, points, centres, prims.covariances)[:, _FULL]
     covariances[present] /= mass[present, None, None]
     if not present.all():
         covariances[~present] = np.median(covariances[present], axis=0)

@@ -17,9 +17,9 @@ from functools import cached_property
 import numpy as np
 
 from dgmm.gaussian import layout
-from dgmm.mixture import EStep, _moment_features
+from dgmm.mixture import EStep
 from dgmm.odometry.overlap import centroid_and_radius
-from dgmm.registration import register_d2d
+from dgmm.registration import FittedMixture, register_d2d
 from dgmm.variants import VARIANTS
 
 _MIN_MASS = 1e-3
@@ -154,12 +154,12 @@ def unseen_sums(frame, rows):
     E-step's centre ``c`` in its unit ``u``: ``Σ r_pk a_p`` times the moment table's columns ``xx, yy, zz, 2xy, 2xz,
     2yz, x, y, z, 1`` of ``(x_p - c) / u`` (``C_p / u²`` on the second moments), shape (K, 10); one compiled pass
     (:func:`dgmm.compiled.e_step.screened_e_step_sums`, the fit's own E-step kernel, screened as the fit was)."""
-    from dgmm.compiled.e_step import screened_e_step_sums  # numba loads only for the schedules that cut
+    from dgmm.compiled.e_step import moment_table, screened_e_step_sums  # numba loads only for the schedules that cut
     e_step, coefficients = frame.last_e_step
     scale, mstep_weights = frame.variant_weights
     n_quadratic = layout(3).n_quadratic
-    moments = _moment_features(frame.primitives.means[rows], frame.primitives.covariances[rows], e_step.centre,
-                               None, e_step.unit)
+    moments = moment_table(frame.primitives.means[rows], frame.primitives.covariances[rows], e_step.centre,
+                           float(e_step.unit))  # mixture._moment_features' values, in one pass
     features = moments.copy()
     features[:, :n_quadratic] *= scale[rows, None]
     screen = np.inf if e_step.screen is None else float(e_step.screen)
@@ -168,19 +168,13 @@ def unseen_sums(frame, rows):
 
 
 def _cut_mixture(frame, unseen):
-    """The frame's mixture cut to its seen primitives (:func:`cut`), components of weight 0 left out."""
+    """The frame's mixture cut to its seen primitives (:func:`cut`), components of weight 0 left out, as the
+    :class:`~dgmm.registration.fitted.FittedMixture` that D2D reads: its arrays are float64 of the right shapes
+    and its weights positive by construction, so D2D's input checks are skipped."""
     weights, means, covariances = cut(frame, unseen)
     keep = weights > 0
     precisions_cholesky = np.transpose(np.linalg.inv(np.linalg.cholesky(covariances[keep])), (0, 2, 1))
-    return _Fitted(weights[keep], means[keep], covariances[keep], precisions_cholesky)
-
-
-@dataclass(frozen=True)
-class _Fitted:
-    weights_: np.ndarray
-    means_: np.ndarray
-    covariances_: np.ndarray
-    precisions_cholesky_: np.ndarray
+    return FittedMixture(weights[keep], means[keep], covariances[keep], precisions_cholesky)
 
 
 def register_measured(fixed, moving, first, solver="gauss-newton", options=None):

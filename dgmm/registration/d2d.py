@@ -17,8 +17,8 @@ from dgmm.gaussian import SCREEN, layout, quadratic_features, unpack
 from dgmm.registration.fitted import EXP_FLOOR, FittedMixture
 from dgmm.registration.pose import params_from_pose, pivot_pose
 from dgmm.registration.rotations import LEVI_CIVITA, rotation_and_jacobian
-from dgmm.registration.solvers import (TRANSLATION_UNIT, check_solver, minimise_bfgs, minimise_gauss_newton,
-                                       pose_matrices)
+from dgmm.registration.solvers import (TRANSLATION_UNIT, check_solver, compiled_gauss_newton, minimise_bfgs,
+                                       minimise_gauss_newton, pose_matrices)
 
 _ROWS, _COLS = layout(3).rows, layout(3).cols  # the 6 distinct entries of a symmetric 3x3
 _SKEW = -np.transpose(LEVI_CIVITA, (2, 0, 1)).reshape(3, 9)
@@ -273,8 +273,17 @@ def _compiled_pose_cost(tables):
     return evaluate
 
 
+def _compiled_loop(tables):
+    """:func:`dgmm.compiled.registration.d2d_gauss_newton` with the tables' arrays bound (the ``solve`` of
+    :func:`~dgmm.registration.solvers.compiled_gauss_newton`)."""
+    from dgmm.compiled import registration as kernels  # numba loads only where Gauss-Newton D2D runs
+
+    return partial(kernels.d2d_gauss_newton, tables.fixed.means, tables.fixed.covariances, tables.offsets,
+                   tables.moving_covariances, tables.centre, tables.log_weights, SCREEN, EXP_FLOOR)
+
+
 def register_d2d(fixed, moving, initial_rotation=None, initial_translation=None, gradient="analytic",
-                 callback=None, options=None, solver="bfgs"):
+                 callback=None, options=None, solver="bfgs", compiled=True):
     """Distribution-to-distribution registration of two mixtures, determinant-free cost (paper §VI-D, visual odometry).
 
     Minimises ``-Σᵢⱼ πᵢ πⱼ exp(-½ yᵀ (Σᵢ + R Σⱼ Rᵀ)⁻¹ y)``, ``y = μᵢ - t - R μⱼ``, rotating about the moving
@@ -298,6 +307,9 @@ def register_d2d(fixed, moving, initial_rotation=None, initial_translation=None,
     solver : {"bfgs", "gauss-newton"}, default="bfgs"
         The paper's BFGS, or damped Newton steps on 6 dof with the exact Hessian (Gauss-Newton where it is not
         positive definite): the same optimum, several times faster.
+    compiled : bool, default=True
+        Gauss-Newton only: the whole loop compiled (:func:`dgmm.compiled.registration.d2d_gauss_newton`), or
+        :func:`~dgmm.registration.solvers.minimise_gauss_newton` on the numpy cost (the reference in tests).
 
     Returns
     -------
@@ -313,8 +325,11 @@ def register_d2d(fixed, moving, initial_rotation=None, initial_translation=None,
     translation = np.zeros(3) if initial_translation is None else initial_translation
     radius = np.sqrt(moving_mix.weights @ np.sum((moving_mix.means - centre) ** 2, axis=1))
     if solver == "gauss-newton":  # on the pose itself: no quaternion
-        return minimise_gauss_newton("d2d", d2d_pose_cost(tables), centre, radius,
-                                     *pivot_pose(rotation, translation, centre), callback, options)
+        start = pivot_pose(rotation, translation, centre)
+        if compiled:
+            return compiled_gauss_newton("d2d", _compiled_loop(tables), centre, radius, *start, callback, options)
+        return minimise_gauss_newton("d2d", d2d_pose_cost(tables, compiled=False), centre, radius, *start, callback,
+                                     options)
     x0 = params_from_pose(rotation, translation, centre)
     return minimise_bfgs("d2d", partial(d2d_cost, tables=tables), centre, TRANSLATION_UNIT * radius, x0, gradient,
                          callback, options)

@@ -8,7 +8,6 @@ responsibilities times the ``(n_components, 12)`` moment table give each point's
 """
 from __future__ import annotations
 
-import time
 from functools import partial
 
 import numpy as np
@@ -16,11 +15,10 @@ import numpy as np
 from dgmm.registration.checks import as_points
 from dgmm.gaussian import SCREEN, quadratic_features, unpack
 from dgmm.registration.fitted import EXP_FLOOR, FittedMixture
-from dgmm.registration.pose import IDENTITY_PARAMS, Registration
+from dgmm.registration.pose import IDENTITY_PARAMS
 from dgmm.registration.rotations import rotation_and_jacobian
-from dgmm.registration.solvers import (GAUSS_NEWTON_CONSTANTS, TRANSLATION_UNIT, check_solver, gauss_newton_settings,
-                                       minimise_bfgs, minimise_gauss_newton, not_finite, pose_derivatives,
-                                       rotation_curvature, step_scale)
+from dgmm.registration.solvers import (TRANSLATION_UNIT, check_solver, compiled_gauss_newton, minimise_bfgs,
+                                       minimise_gauss_newton, pose_derivatives, rotation_curvature)
 
 P2D_TOL = 1e-6
 """P2D's Gauss-Newton stops once a step would turn by less than this (radians, and RMS radii): a 4,000th of the
@@ -253,31 +251,13 @@ def register_p2d(source, mixture, gradient="analytic", callback=None, options=No
 
 def _compiled_gauss_newton(points, centre, mixture, length, callback, options):
     """:func:`~dgmm.registration.solvers.minimise_gauss_newton` of the P2D cost from the identity, the whole loop
-    compiled (:func:`dgmm.compiled.registration.p2d_gauss_newton`: the solver's Python took a third of a
-    registration); ``callback`` sees each kept step's pose once the solve is over."""
+    compiled (:func:`dgmm.compiled.registration.p2d_gauss_newton`, :func:`~dgmm.registration.solvers.compiled_gauss_newton`)."""
     from dgmm.compiled import registration as kernels  # numba loads only where Gauss-Newton P2D runs
 
-    max_iter, tol, damping, max_step = gauss_newton_settings(options)
-    start = time.perf_counter()
-    rotations, translations, costs = np.empty((max_iter + 1, 3, 3)), np.empty((max_iter + 1, 3)), np.empty(max_iter + 1)
-    rotations[0], translations[0] = np.eye(3), 0.0
-    iterations, converged, status = kernels.p2d_gauss_newton(
-        np.ascontiguousarray(points - centre), centre - mixture.origin, mixture.log_density_table, mixture.precisions,
-        mixture.precision_means, gauss_newton_screen(len(mixture.weights)), step_scale(length), max_iter, tol, damping,
-        max_step, GAUSS_NEWTON_CONSTANTS,
-        rotations, translations, costs)
-    if status == kernels.NOT_FINITE:
-        raise not_finite("p2d", iterations)
-    seconds = time.perf_counter() - start
-
-    def snapshot(row, iteration, done):
-        return Registration(rotations[row], translations[row] + centre - rotations[row] @ centre, iteration, seconds,
-                            float(costs[row]), done, "p2d")
-
-    last = iterations - 1 if status == kernels.SEARCH_FAILED else iterations
-    for row in range(1, last + 1) if callback is not None else ():
-        callback(row, snapshot(row, row, False))
-    return snapshot(last, iterations, converged)
+    solve = partial(kernels.p2d_gauss_newton, np.ascontiguousarray(points - centre), centre - mixture.origin,
+                    mixture.log_density_table, mixture.precisions, mixture.precision_means,
+                    gauss_newton_screen(len(mixture.weights)))
+    return compiled_gauss_newton("p2d", solve, centre, length, np.eye(3), np.zeros(3), callback, options)
 
 
 def load_p2d_kernels():

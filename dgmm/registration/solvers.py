@@ -118,8 +118,7 @@ fr1/xyz's odometry registrations (250 frames, 1,241 pairs of a full Newton step 
 be below ``tol``, and Gauss-Newton stops without the derivatives at the new pose (of the 514 such steps there, one
 was followed by a step above ``tol = 1e-4``: 1.4e-4)."""
 GAUSS_NEWTON_CONSTANTS = (OVER_RELAXATION, _NEWTON_CONTRACTION, _MIN_DAMPING, _MAX_DAMPING, _BACKTRACKS)
-"""The constants of :func:`minimise_gauss_newton`, as the compiled P2D loop takes them
-(:func:`dgmm.compiled.registration.p2d_gauss_newton`)."""
+"""The constants of :func:`minimise_gauss_newton`, as the compiled loops take them (:func:`compiled_gauss_newton`)."""
 
 
 def pose_derivatives(rotated, gradient, *weights):
@@ -248,6 +247,46 @@ def minimise_gauss_newton(method, evaluate, centre, length, rotation, translatio
         if callback is not None:
             callback(iteration, snapshot(cost, iteration, False))
     return snapshot(cost, iteration, converged)
+
+
+def compiled_gauss_newton(method, solve, centre, length, rotation, translation, callback, options):
+    """:func:`minimise_gauss_newton` with its whole loop compiled (:func:`dgmm.compiled.registration.p2d_gauss_newton`,
+    :func:`~dgmm.compiled.registration.d2d_gauss_newton`: between the kernel calls of a registration the solver's
+    Python took a third of the time); ``callback`` sees each kept step's pose once the solve is over.
+
+    Parameters
+    ----------
+    method : str
+    solve : callable
+        ``solve(scale, max_iter, tol, damping, max_step, constants, rotations, translations, costs) -> (iterations,
+        converged, status)``: a compiled loop with its cost's arrays bound, from the pose in row 0.
+    centre, length, rotation, translation, callback, options
+        As :func:`minimise_gauss_newton` takes them.
+
+    Returns
+    -------
+    Registration
+    """
+    from dgmm.compiled.registration import NOT_FINITE, SEARCH_FAILED  # numba loads only where the loops run
+
+    max_iter, tol, damping, max_step = gauss_newton_settings(options)
+    start = time.perf_counter()
+    rotations, translations, costs = np.empty((max_iter + 1, 3, 3)), np.empty((max_iter + 1, 3)), np.empty(max_iter + 1)
+    rotations[0], translations[0] = rotation, translation
+    iterations, converged, status = solve(step_scale(length), max_iter, tol, damping, max_step, GAUSS_NEWTON_CONSTANTS,
+                                          rotations, translations, costs)
+    if status == NOT_FINITE:
+        raise not_finite(method, iterations)
+    seconds = time.perf_counter() - start
+
+    def snapshot(row, iteration, done):
+        return Registration(rotations[row], translations[row] + centre - rotations[row] @ centre, iteration, seconds,
+                            float(costs[row]), done, method)
+
+    last = iterations - 1 if status == SEARCH_FAILED else iterations
+    for row in range(1, last + 1) if callback is not None else ():
+        callback(row, snapshot(row, row, False))
+    return snapshot(last, iterations, converged)
 
 
 def gauss_newton_settings(options):
