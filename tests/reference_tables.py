@@ -11,6 +11,10 @@ the benchmark measures itself:
   bootstrap band (:func:`~dgmm.experiments.report.claims.grading.bootstrap`'s tie band, as the report grades Fig 6).
   The failure lists every trial whose minimum changed: an error that moved by more than that tenth (within one
   minimum, a trial's error moves by about 1e-7 degrees: mesh-kmeans against mesh-kmeans-c2f in the reference).
+  ``converged`` may differ only in a trial that ends in its reference's minimum (errors within that tenth): for
+  BFGS it is scipy's gradient test against its "precision loss" stop at the same optimum, decided in the last
+  bits (two of the 20 P2D trials flip between OpenBLAS's Haswell and SkylakeX kernels, their errors within 3e-7
+  degrees of the reference's).
 - odometry.csv: each ATE (and RPE, empty at 8 frames) within a tenth of its protocol's seed spread (the report's
   :data:`~dgmm.experiments.report.claims.odometry.ATE_SEED_SPREAD` and ``AUTHORS_ATE_SEED_SPREAD``, fractions of a
   run's ATE) times its reference value.
@@ -33,6 +37,9 @@ REFERENCE = Path(__file__).with_name("reference")
 TENTH = 0.1
 REGISTRATION_ERRORS = ("rotation_error_deg", "translation_error_pct")
 """The registration.csv columns whose change in a trial is a change of the minimum it ends in."""
+STOPPING_FLAGS = ("converged",)
+"""The registration.csv columns an optimiser's stopping test sets at its optimum: they may differ where the
+trial's minimum did not change."""
 
 
 def assert_within_bands(path):
@@ -41,7 +48,7 @@ def assert_within_bands(path):
     rows, expected = read_csv(path), read_csv(REFERENCE / name)
     numbers, deviations = TABLES[name]
     assert list(rows[0]) == list(expected[0]), f"{name}: columns {list(rows[0])}, reference {list(expected[0])}"
-    exact = [column for column in expected[0] if column not in numbers]
+    exact = [column for column in expected[0] if column not in numbers and column not in STOPPING_FLAGS]
     run = {tuple(row[c] for c in exact): row for row in rows}
     keyed = {tuple(row[c] for c in exact): row for row in expected}
     assert run.keys() == keyed.keys() and len(rows) == len(expected), (
@@ -87,7 +94,8 @@ def _seed_bands(pairs, numbers, exact):
 def _bootstrap_bands(pairs, numbers, exact):
     """A row per trial: each method's mean within a tenth of its bootstrap band; the trials whose minimum changed."""
     failures, changed = [], []
-    for name, method in _groups(pairs, exact, ("trial", "converged")):
+    for name, method in _groups(pairs, exact, ("trial",)):
+        moved = set()
         for column in numbers:
             expected, got = _numbers(method, column)
             band = TENTH * bootstrap(np.mean, expected).band
@@ -96,6 +104,10 @@ def _bootstrap_bands(pairs, numbers, exact):
             if column in REGISTRATION_ERRORS:
                 changed += [f"{key} {_moved(column, g, e, band)}"
                             for (key, _, _), e, g in zip(method, expected, got) if abs(g - e) > band]
+                moved |= {key for (key, _, _), e, g in zip(method, expected, got) if abs(g - e) > band}
+        failures += [f"{key} {flag}: {row[flag]}, reference {reference[flag]}, in a minimum that changed"
+                     for key, reference, row in method for flag in STOPPING_FLAGS
+                     if row[flag] != reference[flag] and key in moved]
     return failures + ["trials whose minimum changed:", *changed] if failures else []
 
 
