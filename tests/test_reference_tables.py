@@ -69,7 +69,8 @@ def test_other_columns_match_exactly(tmp_path, name, column, value):
 def test_a_converged_flag_may_flip_only_in_the_same_minimum(tmp_path):
     """Trial 3 of the textbook mesh-kmeans rows stopped on scipy's precision loss (False) in the reference."""
     rows = read_csv(REFERENCE / "registration.csv")
-    row = next(i for i, r in enumerate(rows) if (r["variant"], r["method"], r["trial"]) == ("textbook", "mesh-kmeans", "3"))
+    row = next(i for i, r in enumerate(rows)
+               if (r["variant"], r["method"], r["trial"]) == ("textbook", "mesh-kmeans", "3"))
     assert rows[row]["converged"] == "False"
     flipped = [{**r, "converged": "True"} if i == row else r for i, r in enumerate(rows)]
     write_csv(tmp_path / "registration.csv", flipped)
