@@ -25,6 +25,7 @@ from __future__ import annotations
 import math
 
 import numba
+from numba.extending import overload
 import numpy as np
 
 # ---- 3x3 helpers
@@ -505,69 +506,9 @@ def p2d_gauss_newton(local, shift, table, precisions, precision_means, screen, s
         :data:`SEARCH_FAILED` (no pose along the last step lowered the cost: the pose is row ``iterations - 1``) or
         :data:`NOT_FINITE` (the cost or its derivatives stopped being finite at iteration ``iterations``).
     """
-    over_relaxation, contraction, min_damping, max_damping, backtracks = constants
-    n_points, n_components = local.shape[0], table.shape[1]
-    kept = p2d_pose_buffers(n_points, n_components)
-    trial = p2d_pose_buffers(n_points, n_components)
-    scratch, factor = np.empty((6, 6)), np.zeros((6, 6))
-    step, move, offset = np.empty(6), np.empty(6), np.empty(3)
-    rotation, translation = rotations[0].copy(), translations[0].copy()
-    new_rotation = np.empty((3, 3))
-    for a in range(3):
-        offset[a] = shift[a] + translation[a]
-    cost = p2d_negative_mean_log_likelihood(local, rotation, offset, table, screen, True, *kept)
-    costs[0] = cost
-    iteration = 0
-    converged = False
-    while iteration < max_iter and not converged:
-        gradient, gauss_newton, exact = p2d_pose_derivatives(precisions, precision_means, *kept)
-        if not (np.isfinite(cost) and np.all(np.isfinite(gradient)) and np.all(np.isfinite(gauss_newton))):
-            return iteration, False, NOT_FINITE
-        newton = _cholesky(exact, factor)
-        hessian = exact if newton else gauss_newton
-        slope, length, new_cost, capped = 0.0, 1.0, cost, False
-        iteration += 1
-        found = False
-        while True:
-            _damped_step(hessian, gradient, damping, scratch, factor, step)
-            _capped(step, 1.0, scale, max_step, step)
-            converged = _step_size(step, scale) < tol
-            if converged:  # the pose moves by less than tol: no need to evaluate it
-                break
-            slope = gradient @ step
-            length = 1.0 if newton else over_relaxation
-            for attempt in range(backtracks + 1):  # the line search of solvers._line_search
-                capped = _capped(step, length, scale, max_step, move)
-                _turned(move[3:], rotation, new_rotation)
-                for a in range(3):
-                    offset[a] = shift[a] + translation[a] + move[a]
-                new_cost = p2d_negative_mean_log_likelihood(local, new_rotation, offset, table, screen, True,
-                                                                    *trial)
-                if new_cost <= cost:
-                    found = True
-                    break
-                if attempt < backtracks:
-                    curvature = new_cost - cost - slope * length
-                    length *= min(max(-slope * length / (2.0 * curvature), 0.1), 0.5) if curvature > 0 else 0.1
-            if found or damping > max_damping:
-                break
-            damping *= 10.0
-        if found:
-            rotation[:, :] = new_rotation
-            translation += move[:3]
-            kept, trial = trial, kept
-            if not newton:
-                over_relaxation = _next_over_relaxation(cost, slope, length, new_cost)
-            cost = new_cost
-            damping = max(damping / 10.0, min_damping)
-            converged = (newton and length == 1.0 and not capped
-                         and contraction * _step_size(step, scale) ** 2 < tol)
-        elif not converged:
-            return iteration, False, SEARCH_FAILED
-        rotations[iteration] = rotation
-        translations[iteration] = translation
-        costs[iteration] = cost
-    return iteration, converged, ENDED
+    buffers = p2d_pose_buffers(local.shape[0], table.shape[1]), p2d_pose_buffers(local.shape[0], table.shape[1])
+    return _gauss_newton_loop((local, shift, table, precisions, precision_means, screen), *buffers, scale, max_iter,
+                              tol, damping, max_step, constants, rotations, translations, costs)
 
 
 # ---- D2D
@@ -807,23 +748,73 @@ def d2d_gauss_newton(fixed_means, fixed_covariances, offsets, moving_covariances
     iterations, converged, status
         As :func:`p2d_gauss_newton`'s.
     """
-    over_relaxation, contraction, min_damping, max_damping, backtracks = constants
     n_fixed, n_moving = fixed_means.shape[0], offsets.shape[0]
-    kept = _d2d_pose_buffers(n_fixed, n_moving)
-    trial = _d2d_pose_buffers(n_fixed, n_moving)
+    buffers = _d2d_pose_buffers(n_fixed, n_moving), _d2d_pose_buffers(n_fixed, n_moving)
+    return _gauss_newton_loop((fixed_means, fixed_covariances, offsets, moving_covariances, centre, log_weights, screen,
+                               floor), *buffers, scale, max_iter, tol, damping, max_step, constants, rotations,
+                              translations, costs)
+
+
+P2D_PROBLEM = 6
+"""The length of P2D's problem tuple, ``(local, shift, table, precisions, precision_means, screen)``; D2D's is
+``(fixed_means, fixed_covariances, offsets, moving_covariances, centre, log_weights, screen, floor)``."""
+
+
+def _cost_at(problem, rotation, translation, move, buffers):
+    """The cost of a Gauss-Newton ``problem`` at the pose ``(R, t' + move[:3])``, leaving in ``buffers`` what
+    :func:`_derivatives_at` reads; compiled code only (its overload picks P2D's or D2D's cost from the problem)."""
+    raise NotImplementedError("compiled code only")
+
+
+@overload(_cost_at, jit_options={"error_model": "numpy"})
+def _cost_at_of(problem, rotation, translation, move, buffers):
+    if len(problem) == P2D_PROBLEM:
+        def p2d(problem, rotation, translation, move, buffers):
+            local, shift, table, _, _, screen = problem
+            offset = np.empty(3)
+            for a in range(3):
+                offset[a] = shift[a] + translation[a] + move[a]
+            return p2d_negative_mean_log_likelihood(local, rotation, offset, table, screen, True, *buffers)
+        return p2d
+
+    def d2d(problem, rotation, translation, move, buffers):
+        moved_by = np.empty(3)
+        for a in range(3):
+            moved_by[a] = translation[a] + move[a]
+        return _d2d_cost_at(*problem, rotation, moved_by, buffers)
+    return d2d
+
+
+def _derivatives_at(problem, buffers):
+    """The gradient, Gauss-Newton and exact Hessians of a Gauss-Newton ``problem`` at the pose whose
+    :func:`_cost_at` filled ``buffers``; compiled code only."""
+    raise NotImplementedError("compiled code only")
+
+
+@overload(_derivatives_at, jit_options={"error_model": "numpy"})
+def _derivatives_at_of(problem, buffers):
+    if len(problem) == P2D_PROBLEM:
+        return lambda problem, buffers: p2d_pose_derivatives(problem[3], problem[4], *buffers)
+    return lambda problem, buffers: d2d_pose_derivatives(problem[0], problem[1], buffers[1], buffers[0], buffers[2],
+                                                         *buffers[3:])
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _gauss_newton_loop(problem, kept, trial, scale, max_iter, tol, damping, max_step, constants, rotations,
+                       translations, costs):
+    """:func:`p2d_gauss_newton`'s and :func:`d2d_gauss_newton`'s loop (their arguments, their results): the
+    solver's steps on ``problem``'s cost, ``kept`` and ``trial`` the buffers of the pose taken and the pose tried."""
+    over_relaxation, contraction, min_damping, max_damping, backtracks = constants
     scratch, factor = np.empty((6, 6)), np.zeros((6, 6))
-    step, move, new_translation = np.empty(6), np.empty(6), np.empty(3)
+    step, move = np.empty(6), np.zeros(6)
     rotation, translation = rotations[0].copy(), translations[0].copy()
     new_rotation = np.empty((3, 3))
-    tables = (fixed_means, fixed_covariances, offsets, moving_covariances, centre, log_weights, screen, floor)
-    cost = _d2d_cost_at(*tables, rotation, translation, kept)
+    cost = _cost_at(problem, rotation, translation, move, kept)
     costs[0] = cost
     iteration = 0
     converged = False
     while iteration < max_iter and not converged:
-        rotated, moved, moved_covariances = kept[0], kept[1], kept[2]
-        gradient, gauss_newton, exact = d2d_pose_derivatives(fixed_means, fixed_covariances, moved, rotated,
-                                                             moved_covariances, *kept[3:])
+        gradient, gauss_newton, exact = _derivatives_at(problem, kept)
         if not (np.isfinite(cost) and np.all(np.isfinite(gradient)) and np.all(np.isfinite(gauss_newton))):
             return iteration, False, NOT_FINITE
         newton = _cholesky(exact, factor)
@@ -842,9 +833,7 @@ def d2d_gauss_newton(fixed_means, fixed_covariances, offsets, moving_covariances
             for attempt in range(backtracks + 1):  # the line search of solvers._line_search
                 capped = _capped(step, length, scale, max_step, move)
                 _turned(move[3:], rotation, new_rotation)
-                for a in range(3):
-                    new_translation[a] = translation[a] + move[a]
-                new_cost = _d2d_cost_at(*tables, new_rotation, new_translation, trial)
+                new_cost = _cost_at(problem, new_rotation, translation, move, trial)
                 if new_cost <= cost:
                     found = True
                     break
@@ -856,7 +845,7 @@ def d2d_gauss_newton(fixed_means, fixed_covariances, offsets, moving_covariances
             damping *= 10.0
         if found:
             rotation[:, :] = new_rotation
-            translation[:] = new_translation
+            translation += move[:3]
             kept, trial = trial, kept
             if not newton:
                 over_relaxation = _next_over_relaxation(cost, slope, length, new_cost)
