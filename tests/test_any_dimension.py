@@ -46,7 +46,8 @@ def test_points_equal_scikit_learn_step_for_step(d, max_iter, covariance_type):
     # each precision to 1e-9 of itself: the moment form's variance (E[x²] − μ²) loses the digits of E[x²] / σ², and the
     # tightest component (d=32, spherical: σ² = 3.5e-5 among coordinates of size 4, a ratio of 5e5) keeps 10 of 16
     np.testing.assert_allclose(ours.precisions_cholesky_, reference.precisions_cholesky_, rtol=1e-9,
-                               atol=1e-10 * np.abs(reference.precisions_cholesky_).max(), err_msg="precisions_cholesky_")
+                               atol=1e-10 * np.abs(reference.precisions_cholesky_).max(),
+                               err_msg="precisions_cholesky_")
     np.testing.assert_allclose(ours.history_, reference.lower_bounds_[1:], rtol=0, atol=1e-10)
     assert ours.lower_bound_ == pytest.approx(reference.lower_bound_, abs=1e-10)
     # relative: a log-likelihood of -64 moves by 1e-9 when a variance moves by 2e-11 of itself (d=32, spherical)

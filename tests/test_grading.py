@@ -75,7 +75,8 @@ def test_a_never_claim_with_ties_is_reproduced_when_the_data_can_tell_it():
                          "claim out.")
     assert grade_share(outcomes(0, 3, 0), EVERY).why == ("The data cannot tell: all 3 comparisons lie inside their "
                                                           "noise.")
-    assert grade_share(outcomes(0, 1, 0), EVERY).why == "The data cannot tell: its one comparison lies inside its noise."
+    assert grade_share(outcomes(0, 1, 0), EVERY).why == ("The data cannot tell: its one comparison lies inside its "
+                                                          "noise.")
     # one loss among ties: the claim's share fails on what is untied; not beyond chance -> not reproduced
     assert grade_share(outcomes(0, 5, 1), EVERY).verdict == NOT
 

@@ -11,8 +11,8 @@
 
 The library imports them only where they run, so numba's import (about 0.2 s) and the loading of its on-disk cache
 (``cache=True``: compiled code beside each module, made by a machine's first run; about 0.15 s for P2D's kernels)
-cost nothing to the paper's fits, which stay numpy, until a mixture scores. The sweep's job server loads P2D's kernels once
-(:func:`dgmm.registration.p2d.load_p2d_kernels`) for its registration jobs. The kernels import nothing of the library
+cost nothing to the paper's fits, which stay numpy, until a mixture scores. The sweep's job server loads P2D's
+kernels once (:func:`dgmm.registration.p2d.load_p2d_kernels`) for its registration jobs. The kernels import nothing of the library
 above them; each module holds everything its kernels call and takes other modules' constants as arguments: numba's
 cache checks only the file of the function it compiled.
 """

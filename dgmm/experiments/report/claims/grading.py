@@ -311,8 +311,11 @@ def grade_share(comparisons, quantifier, cause=""):
 def _undecided(wins, ties, losses):
     """Which of an inconclusive grade's comparisons the noise leaves undecided, as a sentence."""
     if wins + losses:
-        return f"{ties} of {wins + ties + losses} comparisons lie inside their noise; the untied ones bear the claim out."
-    return "its one comparison lies inside its noise." if ties == 1 else f"all {ties} comparisons lie inside their noise."
+        return (f"{ties} of {wins + ties + losses} comparisons lie inside their noise; the untied ones bear the claim "
+                "out.")
+    if ties == 1:
+        return "its one comparison lies inside its noise."
+    return f"all {ties} comparisons lie inside their noise."
 
 
 @dataclass(frozen=True)

@@ -111,8 +111,8 @@ def _split_cause(data, variant, grades, compared):
     shared, bound = _column(rows, "shared_gap"), _column(rows, "bound_gap")
     if abs(shared.value) <= shared.band:
         return Cause(f"Measured: each piece's own responsibility (eq. 8's ηᵢⱼ), which raises the bound by "
-                     f"{bound:+.3f} nat; refitted with one per original triangle, the split mesh scores as the original "
-                     f"({shared:+.0e} nat).")
+                     f"{bound:+.3f} nat; refitted with one per original triangle, the split mesh scores as the "
+                     f"original ({shared:+.0e} nat).")
     return Cause(f"Cause not found: refitted with one responsibility per original triangle the split mesh still moves "
                  f"({shared:+.3f} nat).")
 
