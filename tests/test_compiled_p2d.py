@@ -1,6 +1,7 @@
 """The compiled P2D kernels (dgmm.compiled.registration) against the numpy reference (every pair, numpy's exp):
 costs, derivatives and the poses of both solvers; the central-difference tests of test_registration.py check the
 compiled derivatives on their own."""
+import math
 import subprocess
 import sys
 from types import SimpleNamespace
@@ -217,3 +218,18 @@ print([name for name in names if list(getattr(kernels, name).signatures) != load
     assert loaded == str(["p2d_gauss_newton", "p2d_negative_mean_log_likelihood", "p2d_params_gradient",
                           "p2d_pose_buffers", "quaternion_rotation_and_jacobian"])
     assert added == "[]"
+
+
+def test_vectorised_exponentials_are_within_an_ulp_of_math_exp():
+    """Gauss-Newton's exponentials (``_exp_in_place``, Cody-Waite reduction and a Taylor polynomial) on 200,000
+    values over [-708, 0], with 0, -708 and the reduction's halfway points ±ln 2 / 2: each within one ulp of
+    ``math.exp``'s value, and most equal to it."""
+    rng = np.random.default_rng(4)
+    half = np.log(2.0) / 2
+    values = np.concatenate([rng.uniform(-708.0, 0.0, 200_000), rng.uniform(-1.0, 0.0, 1000),
+                             [0.0, -708.0, -half, -3 * half, -1e-300]])
+    expected = np.array([math.exp(x) for x in values])
+    ours = values.copy()
+    kernels._exp_in_place(ours, np.empty_like(ours))
+    assert np.all(np.abs(ours - expected) <= np.spacing(expected))
+    assert np.mean(ours == expected) > 0.5
