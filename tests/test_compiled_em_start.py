@@ -4,7 +4,7 @@ lifted centres and its argmin."""
 import numpy as np
 import pytest
 
-from dgmm.compiled.em_start import cluster_scatters, cluster_sums, nearest_centres
+from dgmm.compiled.em_start import _first_at_least, cluster_scatters, cluster_sums, nearest_centres
 from dgmm.odometry import CAMERAS, pixel_primitives, read_sequence
 from dgmm.odometry.em_start import kmeans_plusplus
 from dgmm.variants import VARIANTS
@@ -133,3 +133,11 @@ def test_cluster_scatters_are_the_numpy_rows_bincounted():
     moments = offsets[:, rows] * offsets[:, cols] + covariances[:, rows, cols]
     expected = np.stack([np.bincount(labels, weights * moments[:, m], minlength=30) for m in range(6)], 1)
     np.testing.assert_array_equal(cluster_scatters(labels, weights, points, centres, covariances), expected)
+
+
+def test_a_draw_lands_where_numpy_searchsorted_puts_it_ties_included():
+    """k-means++'s draw of a candidate (``_first_at_least``) is ``np.searchsorted``'s left side, on cumulative
+    potentials with flat runs (repeated points add 0) and on draws that equal an entry, at its ends and past them."""
+    cumulative = np.cumsum([0.0, 0.0, 1.0, 0.0, 0.0, 2.5, 0.0, 3.0, 0.0])
+    for value in [-1.0, 0.0, 0.5, 1.0, 2.0, 3.5, 4.0, 6.5, 7.0, 1e9, *np.unique(cumulative)]:
+        assert _first_at_least(cumulative, value) == np.searchsorted(cumulative, value, side="left"), value
