@@ -12,8 +12,9 @@ so that runs on machines of different speed compare. Steps:
    ``snakemake --cores N``, the clone first on ``PYTHONPATH``);
 4. read every job's Snakemake ``benchmark:`` file (``results/benchmarks/{rule}/...tsv``, its wall time ``s``) and,
    for the rules that time their own computation, the job's timing table (the seconds a fit's seeds, a chunk's
-   trials or an odometry run's frames took): overhead = job wall time - computation; and the visual-odometry
-   stage's share of the job time (the ``odometry_*`` rules' job walls over all jobs'; goal ≤ a third);
+   trials, an odometry run's frames or a timing check's repeats took): overhead = job wall time - computation; the
+   visual-odometry stage's share of the job time (the ``odometry_*`` rules' job walls over all jobs'; goal ≤ a
+   third); and the floor, those computations alone spread over the cores, the wall time no cut of overhead beats;
 5. account for the cores' idle time, ``cores x wall - sum of job walls``, from Snakemake's metadata
    (``.snakemake/metadata``: each job's start, the time its outputs were written, its inputs): before the first
    job starts (Snakemake builds the DAG), with fewer jobs running than cores (between a job's end and the next
@@ -23,7 +24,7 @@ so that runs on machines of different speed compare. Steps:
 
 Usage: ``python benchmarks/sweep_profile.py [--cores 2] [--keep]`` (``make profile``); it prints the tables of
 docs/benchmarks/sweep.md, ready to paste. ``--workdir DIR`` prints the tables of a run already made in ``DIR``
-(its wall time taken from its first job's start to its last job's end).
+(its wall time taken from its first job's start to its last job's end; ``--yardstick S`` gives its units).
 """
 import argparse
 import base64
@@ -50,6 +51,8 @@ REPO = Path(__file__).resolve().parents[1]
 COMPUTATION = {
     "fit": (lambda job: f"fits/{job}/seconds.csv", ("fit_seconds",)),
     "registration_chunk": (lambda job: f"registration/{job}/seconds.csv", ("seconds",)),
+    "odometry_run": (lambda job: f"odometry/{job}/seconds.csv", ("cpu_seconds",)),
+    "check_timing": (lambda job: f"checks/timing/{job}.csv", ("seconds",)),
 }
 
 
@@ -72,7 +75,7 @@ def job_times(results):
         if rule in COMPUTATION and len(relative.parts) > 1:
             table, columns = COMPUTATION[rule]
             job = relative.relative_to(rule).with_suffix("").as_posix()
-            computation = sum(float(r[c]) for r in read_rows(results / table(job)) for c in columns)
+            computation = sum(float(r[c]) for r in read_rows(results / table(job)) for c in columns if r[c])
         jobs[rule].append((float(row["s"]), computation))
     return jobs
 
@@ -121,6 +124,17 @@ def stage_line(jobs, prefix="odometry"):
     total, stage = job_wall(jobs), job_wall(jobs, prefix)
     return (f"Visual odometry (the `{prefix}_*` rules): {stage:.0f} of {total:.0f} s of job time, "
             f"**{100 * stage / total:.1f}%** (goal ≤ a third).")
+
+
+def floor_line(jobs, cores, yardstick=None):
+    """Markdown line: the sweep's wall time if nothing but the computations its rules time themselves ran (the fits'
+    seeds, the registration trials, the odometry frames' CPU, the timing checks' repeats), spread evenly over
+    ``cores``: a floor no cut of overhead alone can go below (in sweep units with ``yardstick``)."""
+    computation = sum(t for times in jobs.values() for _, t in times if t is not None)
+    units = f", **{computation / cores / yardstick:.1f} sweep units**" if yardstick else ""
+    return (f"Computation alone (fits' seeds, registration trials, odometry frames' CPU, timing repeats): "
+            f"{computation:.0f} of {job_wall(jobs):.0f} s of job time; on {cores} cores with nothing else, "
+            f"{computation / cores:.0f} s{units}.")
 
 
 def running_below(spans, cores):
@@ -192,12 +206,14 @@ def main():
     parser.add_argument("--cores", type=int, default=2)
     parser.add_argument("--keep", action="store_true", help="keep the clone (its results/) after the run")
     parser.add_argument("--workdir", type=Path, help="only print the tables of the run already made in this folder")
+    parser.add_argument("--yardstick", type=float, help="with --workdir: that run's yardstick seconds, for units")
     args = parser.parse_args()
     if args.workdir is not None:
         spans = job_spans(args.workdir)
         jobs = job_times(args.workdir / "results")
         print(rule_table(jobs) + "\n")
         print(stage_line(jobs) + "\n")
+        print(floor_line(jobs, args.cores, args.yardstick) + "\n")
         print(idle_table(spans, jobs, args.cores, max(j["end"] for j in spans) - min(j["start"] for j in spans)))
         return
 
@@ -221,11 +237,13 @@ def main():
               f"**{wall / yardstick:.1f} sweep units** (goal ≤ 15); load average before "
               f"{' / '.join(f'{x:.2f}' for x in load_before)}, after {' / '.join(f'{x:.2f}' for x in load)}. "
               "Per rule, from each job's Snakemake `benchmark:` file (results/benchmarks/) and, for `fit` and "
-              "`registration_chunk`, the job's own timing table (its seeds' or trials' seconds): overhead is the "
+              "`registration_chunk`, `odometry_run` and `check_timing`, the job's own timing table (its seeds', "
+              "trials', frames' or repeats' seconds): overhead is the "
               "rest of the job (starting it, loading, scoring, recordings; goal ≤ 1 s median).\n")
         jobs = job_times(clone / "results")
         print(rule_table(jobs) + "\n")
         print(stage_line(jobs) + "\n")
+        print(floor_line(jobs, args.cores, yardstick) + "\n")
         print(idle_table(job_spans(clone), jobs, args.cores, wall, run_start, run_end))
     finally:
         if args.keep:
