@@ -236,7 +236,7 @@ def main():
               f"(scikit-learn, 50k points, K=100, 25 iterations, 1 thread) {yardstick:.2f} s; "
               f"**{wall / yardstick:.1f} sweep units** (goal ≤ 15); load average before "
               f"{' / '.join(f'{x:.2f}' for x in load_before)}, after {' / '.join(f'{x:.2f}' for x in load)}. "
-              "Per rule, from each job's Snakemake `benchmark:` file (results/benchmarks/) and, for `fit` and "
+              "Per rule, from each job's Snakemake `benchmark:` file (results/benchmarks/) and, for `fit`, "
               "`registration_chunk`, `odometry_run` and `check_timing`, the job's own timing table (its seeds', "
               "trials', frames' or repeats' seconds): overhead is the "
               "rest of the job (starting it, loading, scoring, recordings; goal ≤ 1 s median).\n")
