@@ -6,6 +6,7 @@ from scipy.special import logsumexp
 from sklearn.mixture import GaussianMixture as SklearnMixture
 
 from dgmm import GaussianMixture
+from dgmm.compiled.e_step import moment_table, table_log_normalisers
 from dgmm.compiled.scoring import screened_log_normalisers
 
 
@@ -30,3 +31,23 @@ def test_a_bunny_score_is_scikit_learn_s(bunny_res4):
     reference.weights_, reference.means_, reference.covariances_ = ours.weights_, ours.means_, ours.covariances_
     reference.precisions_cholesky_ = np.linalg.cholesky(np.linalg.inv(ours.covariances_))
     np.testing.assert_allclose(ours.score_samples(points), reference.score_samples(points), rtol=0, atol=1e-9)
+
+
+def test_table_kernel_is_logsumexp_of_the_product_to_rounding():
+    """3-D points' moment table under 150 components (three words of bits) whose terms spread over hundreds of
+    nats: the fused log-normalisers equal scipy's logsumexp of numpy's product over every term to rounding, 1,001
+    rows (a last, partial block); a row's value is the same bits in any block (the table from row 13 on); a screen
+    of e^-1 leaves out terms that count."""
+    rng = np.random.default_rng(1)
+    points = rng.normal(0.0, 1.0, size=(1001, 3))
+    table = moment_table(points, np.zeros((1001, 3, 3)), np.zeros(3), 1.0)
+    coefficients = np.zeros((11, 150))
+    coefficients[:3] = -rng.uniform(1.0, 40.0, size=(3, 150))  # -1/2 of diagonal precisions on x^2, y^2, z^2
+    coefficients[6:9] = rng.normal(0.0, 20.0, size=(3, 150))
+    coefficients[10] = rng.normal(0.0, 3.0, size=150)
+    log_rho = table @ coefficients
+    assert 0.3 < np.mean(log_rho - log_rho.max(axis=1, keepdims=True) < -50) < 0.95
+    ours = table_log_normalisers(table, coefficients, 50.0)
+    np.testing.assert_allclose(ours, logsumexp(log_rho, axis=1), rtol=1e-14, atol=1e-13)
+    assert np.array_equal(table_log_normalisers(table[13:], coefficients, 50.0), ours[13:])
+    assert np.max(ours - table_log_normalisers(table, coefficients, 1.0)) > 1e-3

@@ -2,8 +2,8 @@
 
 - :mod:`~dgmm.compiled.e_step`: a screened fit's E-step and M-step sums in one pass, and the screened
   exponentials of its responsibilities, the far pairs left out (``GaussianMixture(screen=...)``, the odometry
-  frames' fits);
-- :mod:`~dgmm.compiled.scoring`: scoring's log-normalisers, the far terms left out (every ``score``);
+  frames' fits); on the same blocks, scoring's log-normalisers of 3-D primitives (every 3-D ``score``);
+- :mod:`~dgmm.compiled.scoring`: scoring's log-normalisers in other dimensions, the far terms left out;
 - :mod:`~dgmm.compiled.registration`: the P2D cost and its derivatives for both solvers (``register_p2d``, the
   sweep's registrations), and D2D's for Gauss-Newton (``register_d2d(solver="gauss-newton")``, odometry's);
 - :mod:`~dgmm.compiled.visibility`, :mod:`~dgmm.compiled.measured_cut`: the odometry cut rounds' visibility test

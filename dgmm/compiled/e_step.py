@@ -9,7 +9,9 @@ fit equals the unscreened one to rounding. Beyond the paper (which computes ever
 
 - :func:`screened_e_step_sums`: a screened fit's E-step and M-step sums in one pass over a block's primitives (the
   numpy E-step's product, exponentials and M-step product, one primitive at a time, the M-step over the kept pairs
-  only);
+  only), on :func:`screen_block`;
+- :func:`table_log_normalisers`: scoring's log-normalisers of 3-D primitives on the same :func:`screen_block` (every
+  3-D ``score``; other dimensions: :mod:`dgmm.compiled.scoring`);
 - :func:`exp_shifted_screened`: the exponentials alone, for responsibilities (``EStep(screen=...)``).
 """
 from __future__ import annotations
@@ -53,19 +55,70 @@ def _trailing_zeros(typingctx, mask):
 
 
 BLOCK = 32
-"""Primitives whose ``log rho`` :func:`screened_e_step_sums` computes together: the loop over a block's primitives
+"""Primitives whose ``log rho`` :func:`screen_block` computes together: the loop over a block's primitives
 vectorises with each component's 11 coefficients held in registers (as the P2D cost's,
 :data:`dgmm.compiled.registration.BLOCK`)."""
 
 
+@numba.njit(cache=True, nogil=True, error_model="numpy", inline="always")
+def block_arrays(n_components):
+    """:func:`screen_block`'s working arrays for ``n_components``: a block's features (11, BLOCK), its ``log rho``
+    (n_components, BLOCK), each primitive's best (BLOCK,), and the pairs within the screen as bits."""
+    features = np.zeros((11, BLOCK))  # a last, partial block's unused columns: finite, their results unread
+    return (features, np.empty((n_components, BLOCK)), np.empty(BLOCK),
+            np.empty(((n_components + 63) // 64, BLOCK), dtype=np.uint64))
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy", inline="always")
+def screen_block(features, first, coefficients, screen, block):
+    """``log rho`` of the (up to) :data:`BLOCK` rows of ``features`` from ``first`` (summed in the coefficients' row
+    order: a primitive's values do not depend on its block), each one's best, and the pairs within ``e^-screen`` of
+    it as bits (a compare per pair, no branch: on fr1/xyz frames a tenth less time than a branch per pair), into
+    ``block`` (:func:`block_arrays`); returns the number of rows."""
+    size = min(BLOCK, features.shape[0] - first)
+    block_features, log_rho, peaks, bits = block
+    for j in range(size):
+        for c in range(11):
+            block_features[c, j] = features[first + j, c]
+    for k in range(coefficients.shape[1]):
+        c0, c1, c2, c3 = coefficients[0, k], coefficients[1, k], coefficients[2, k], coefficients[3, k]
+        c4, c5, c6, c7 = coefficients[4, k], coefficients[5, k], coefficients[6, k], coefficients[7, k]
+        c8, c9, c10 = coefficients[8, k], coefficients[9, k], coefficients[10, k]
+        for j in range(BLOCK):
+            log_rho[k, j] = (block_features[0, j] * c0 + block_features[1, j] * c1 + block_features[2, j] * c2
+                             + block_features[3, j] * c3 + block_features[4, j] * c4 + block_features[5, j] * c5
+                             + block_features[6, j] * c6 + block_features[7, j] * c7 + block_features[8, j] * c8
+                             + block_features[9, j] * c9 + block_features[10, j] * c10)
+    peaks[:] = -np.inf  # in a loop of its own: taken in the loop above, the running maximum kept it scalar
+    for k in range(coefficients.shape[1]):
+        for j in range(BLOCK):
+            peaks[j] = np.maximum(peaks[j], log_rho[k, j])  # vectorises; max() measured 3x slower
+    bits[:, :] = 0
+    for k in range(coefficients.shape[1]):  # the pairs within the screen as bits, without a branch per pair
+        word, shift = k >> 6, np.uint64(k & 63)
+        for j in range(BLOCK):
+            bits[word, j] |= np.uint64(log_rho[k, j] - peaks[j] > -screen) << shift
+    return size
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy", inline="always")
+def kept_components(bits, j, kept):
+    """Write the components of row ``j``'s set bits into ``kept``, ascending; return their count."""
+    count = 0
+    for word in range(bits.shape[0]):
+        mask = bits[word, j]
+        while mask:
+            kept[count] = 64 * word + _trailing_zeros(mask)
+            count += 1
+            mask &= mask - np.uint64(1)
+    return count
+
+
 @numba.njit(cache=True, nogil=True, error_model="numpy")
 def screened_e_step_sums(features, coefficients, moments, row_weights, screen, log_norm):
-    """One block of a screened fit's E-step fused with its M-step sums: ``log rho`` of every (component, primitive)
-    pair, :data:`BLOCK` primitives at a time (summed in the coefficients' row order: a primitive's values do not
-    depend on its block), each primitive's best, and the pairs within ``e^-screen`` of it as bits (a compare per
-    pair, no branch: on fr1/xyz frames a tenth less time than a branch per pair); then primitive by primitive, from
-    its set bits in order, the exponentials of those pairs, its log-normaliser, and the kept pairs'
-    responsibilities times its weighted moments.
+    """One block of a screened fit's E-step fused with its M-step sums: :func:`screen_block` :data:`BLOCK`
+    primitives at a time, then primitive by primitive, from its set bits in order, the exponentials of the kept
+    pairs, its log-normaliser, and the kept pairs' responsibilities times its weighted moments.
 
     Parameters
     ----------
@@ -88,45 +141,16 @@ def screened_e_step_sums(features, coefficients, moments, row_weights, screen, l
     """
     n_rows, n_components = features.shape[0], coefficients.shape[1]
     sums = np.zeros((n_components, 10))
-    block_features = np.zeros((11, BLOCK))  # a last, partial block's unused columns: finite, their results unread
-    log_rho = np.empty((n_components, BLOCK))
-    peaks = np.empty(BLOCK)
+    block = block_arrays(n_components)
+    log_rho, peaks, bits = block[1], block[2], block[3]
     terms = np.empty(n_components)
     kept = np.empty(n_components, dtype=np.int64)
-    bits = np.empty(((n_components + 63) // 64, BLOCK), dtype=np.uint64)
     row = np.empty(10)
     for first in range(0, n_rows, BLOCK):
-        size = min(BLOCK, n_rows - first)
-        for j in range(size):
-            for c in range(11):
-                block_features[c, j] = features[first + j, c]
-        for k in range(n_components):
-            c0, c1, c2, c3 = coefficients[0, k], coefficients[1, k], coefficients[2, k], coefficients[3, k]
-            c4, c5, c6, c7 = coefficients[4, k], coefficients[5, k], coefficients[6, k], coefficients[7, k]
-            c8, c9, c10 = coefficients[8, k], coefficients[9, k], coefficients[10, k]
-            for j in range(BLOCK):
-                log_rho[k, j] = (block_features[0, j] * c0 + block_features[1, j] * c1 + block_features[2, j] * c2
-                                 + block_features[3, j] * c3 + block_features[4, j] * c4 + block_features[5, j] * c5
-                                 + block_features[6, j] * c6 + block_features[7, j] * c7 + block_features[8, j] * c8
-                                 + block_features[9, j] * c9 + block_features[10, j] * c10)
-        peaks[:] = -np.inf  # in a loop of its own: taken in the loop above, the running maximum kept it scalar
-        for k in range(n_components):
-            for j in range(BLOCK):
-                peaks[j] = np.maximum(peaks[j], log_rho[k, j])  # vectorises; max() measured 3x slower
-        bits[:, :] = 0
-        for k in range(n_components):  # the pairs within the screen as bits, without a branch per pair
-            word, shift = k >> 6, np.uint64(k & 63)
-            for j in range(BLOCK):
-                bits[word, j] |= np.uint64(log_rho[k, j] - peaks[j] > -screen) << shift
+        size = screen_block(features, first, coefficients, screen, block)
         for j in range(size):
             peak = peaks[j]
-            count = 0
-            for word in range(bits.shape[0]):  # the set bits in order: the kept components, ascending
-                mask = bits[word, j]
-                while mask:
-                    kept[count] = 64 * word + _trailing_zeros(mask)
-                    count += 1
-                    mask &= mask - np.uint64(1)
+            count = kept_components(bits, j, kept)
             total = 0.0
             for i in range(count):
                 terms[i] = math.exp(log_rho[kept[i], j] - peak)
@@ -140,6 +164,24 @@ def screened_e_step_sums(features, coefficients, moments, row_weights, screen, l
                 for c in range(10):
                     sums[k, c] += term * row[c]
     return sums
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def table_log_normalisers(table, coefficients, screen):
+    """``logsumexp_k log rho`` of each row of a 3-D moment table (n_rows, 11) under ``coefficients`` (11,
+    n_components), the terms below ``e^-screen`` of the row's largest left out; shape (n_rows,). Kept terms are
+    summed in component order, each row's value whatever its block."""
+    out = np.empty(table.shape[0])
+    block = block_arrays(coefficients.shape[1])
+    log_rho, peaks, bits = block[1], block[2], block[3]
+    kept = np.empty(coefficients.shape[1], dtype=np.int64)
+    for first in range(0, table.shape[0], BLOCK):
+        for j in range(screen_block(table, first, coefficients, screen, block)):
+            total = 0.0
+            for i in range(kept_components(bits, j, kept)):
+                total += math.exp(log_rho[kept[i], j] - peaks[j])
+            out[first + j] = peaks[j] + math.log(total)
+    return out
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")

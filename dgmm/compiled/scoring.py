@@ -2,12 +2,14 @@
 
 A score is ``logsumexp_k log rho`` of each evaluation point or primitive; on a surface most of a point's terms lie
 far below its best component (bunny, 50k points, K = 400 fits: most terms more than 50 nats down), so numpy's
-passes over every term (maximum, shift, floor, exponential, sum) cost several times the one compiled pass here,
-which takes exponentials only of the terms within ``e^-screen`` of the best. At the library's ``SCREEN`` of 50 the
-left-out terms change no sum beyond rounding (:data:`dgmm.gaussian.SCREEN`). The E-step's
-:func:`~dgmm.compiled.e_step.exp_shifted_screened` does the same sums but writes every exponential back, for the
-responsibilities, over a component-major block: a score through it takes 1.4 times as long (bunny res4 fits, 50k
-points, one thread, product included: 14.0 / 28.9 / 79.4 ms against 10.6 / 19.7 / 56.8 at K = 25 / 100 / 400).
+passes over every term (maximum, shift, floor, exponential, sum) cost several times one compiled pass, which takes
+exponentials only of the terms within ``e^-screen`` of the best. At the library's ``SCREEN`` of 50 the left-out
+terms change no sum beyond rounding (:data:`dgmm.gaussian.SCREEN`).
+
+Here :func:`screened_log_normalisers`, for any dimension, from ``log rho`` blocks (BLAS's product of the moment
+features and the coefficients); 3-D primitives score through :func:`dgmm.compiled.e_step.table_log_normalisers`,
+which computes ``log rho`` in registers as the screened E-step does, never writing it out (about twice as fast:
+docs/benchmarks/em.md).
 """
 from __future__ import annotations
 
@@ -34,3 +36,4 @@ def screened_log_normalisers(log_rho, screen):
                 total += math.exp(shifted)
         out[n] = peak + math.log(total)
     return out
+
