@@ -5,8 +5,8 @@ imports first and times only what the job does after them: read the input mesh a
 primitives, open the recordings (MCAP and rerun), fit the 10 seeds (recording every iteration), score each fit on
 the 50,000-point evaluation set (its primitives built once), close the recordings. The sweep profile counts the fits
 as the job's computation and the rest as its overhead. Scoring is timed twice more, one seed's mixture on the
-evaluation set: in the cache-sized blocks ``GaussianMixture.score`` uses, and in one block of all rows (as before,
-with 64k-row blocks).
+evaluation set: from the moment table, as ``GaussianMixture.score`` scores 3-D primitives, and from BLAS's 1 MiB
+blocks of ``log rho``, its route in other dimensions (and 3-D's before 8faf1f5).
 
 The evaluation set is a Poisson-disk sample of bunny res4 as the data stage draws it (dgmm.meshes.poisson_disk; a
 few seconds, not timed). Times are process CPU and wall; the load average is printed beside them.
@@ -37,7 +37,9 @@ import trimesh  # noqa: E402
 from threadpoolctl import threadpool_limits  # noqa: E402
 
 import dgmm.mixture  # noqa: E402
+from dgmm.compiled.scoring import screened_log_normalisers  # noqa: E402
 from dgmm.data import load_mesh, save_ply  # noqa: E402
+from dgmm.gaussian import SCREEN  # noqa: E402
 from dgmm.experiments.sweep import SIZED, build_input, fit_seeds, parse_input  # noqa: E402
 from dgmm.primitives import Primitives  # noqa: E402
 from dgmm.meshes import poisson_disk  # noqa: E402
@@ -136,17 +138,18 @@ def main():
         phases.mark(f"score {args.seeds} fits on the {len(evaluation)} evaluation points")
         recorder.close()
         phases.mark("close the recordings")
-        blocked = _cpu(lambda: models[0].score_samples(evaluation))
-        dgmm.mixture._SCORE_BLOCK_BYTES = 8 * args.components * len(evaluation)
-        one_block = _cpu(lambda: models[0].score_samples(evaluation))
+        table = _cpu(lambda: models[0].score_samples(evaluation))
+        e_step = dgmm.mixture.EStep(*models[0]._full_parameters())
+        blocks = _cpu(lambda: np.concatenate([screened_log_normalisers(rows, SCREEN) for rows in
+                                              e_step._log_rho_rows(prepared.means, prepared.covariances, 1.0)]))
 
     print(f"\nfit job {args.input} K={args.components} {args.init} {args.variant}, {args.seeds} seeds, 25 iterations, "
           f"1 thread ({len(prims)} primitives; fit seconds as the job records them: {sum(seconds):.3f})")
     print(f"{'phase':>72} {'wall s':>7} {'CPU s':>6}")
     for name, wall, cpu in phases.rows:
         print(f"{name:>72} {wall:7.3f} {cpu:6.3f}")
-    print(f"one score of {len(evaluation)} points, CPU: {1e3 * blocked:.1f} ms in 1 MiB blocks, {1e3 * one_block:.1f} ms "
-          f"in one block ({one_block / blocked:.2f}x)")
+    print(f"one score of {len(evaluation)} points, CPU: {1e3 * table:.1f} ms from the moment table, {1e3 * blocks:.1f} "
+          f"ms from 1 MiB log rho blocks ({blocks / table:.2f}x)")
     for name, (wall, cpu) in start_seconds(folder).items():
         print(f"job start, {name}: median wall {wall:.3f} s, client CPU {cpu:.3f} s")
     print(f"load average at end: {os.getloadavg()}")
