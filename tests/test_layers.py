@@ -81,6 +81,26 @@ def test_the_kernels_and_the_recorders_import_nothing_above_them():
     assert upward == []
 
 
+def kernel_imports(root):
+    """``module imports name`` for every import of the library by a module of ``root/dgmm/compiled``: numba's cache
+    checks only the file of the function it compiled, so a kernel calling another module's kernel would run that
+    callee's stale compiled code after an edit (each module holds everything its kernels call)."""
+    return [f"{name} imports {imported}" for path in sorted((root / "dgmm" / "compiled").glob("*.py"))
+            for name in [module_name(path, root)]
+            for imported in sorted(imported_names(path, name)) if within(imported, "dgmm")]
+
+
+def test_each_kernel_module_imports_nothing_of_the_library():
+    assert kernel_imports(REPO) == []
+
+
+def test_a_kernel_module_importing_another_is_named(tmp_path):
+    (tmp_path / "dgmm" / "compiled").mkdir(parents=True)
+    (tmp_path / "dgmm" / "compiled" / "scoring.py").write_text("import numba\nfrom .e_step import screen_block\n")
+    assert kernel_imports(tmp_path) == ["dgmm.compiled.scoring imports dgmm.compiled.e_step",
+                                        "dgmm.compiled.scoring imports dgmm.compiled.e_step.screen_block"]
+
+
 def test_the_top_level_holds_the_library_s_modules_and_the_floors():
     top = sorted(path.name for path in (REPO / "dgmm").glob("*.py"))
     packages = sorted(path.name for path in (REPO / "dgmm").iterdir() if (path / "__init__.py").is_file())
