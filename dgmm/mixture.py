@@ -340,9 +340,10 @@ class EStep:
     def log_normalisers(self, means, covariances):
         """``logsumexp_i log rho`` of each primitive (n_rows,), the textbook E-step's, in one compiled pass a block,
         the terms below ``e^-SCREEN`` of a primitive's best left out (which changes no sum beyond rounding,
-        :data:`dgmm.gaussian.SCREEN`): in 3-D from the moment table, chunk by chunk, ``log rho`` never written out
-        (:func:`dgmm.compiled.e_step.table_log_normalisers`), else from BLAS's ``log rho`` blocks
-        (:mod:`dgmm.compiled.scoring`). numba loads only where a mixture scores."""
+        :data:`dgmm.gaussian.SCREEN`): in 3-D from the moment table, ``log rho`` never written out
+        (:func:`dgmm.compiled.e_step.table_log_normalisers`; the table's 11 columns a row take less memory than the
+        primitives' covariances), else from BLAS's ``log rho`` blocks (:mod:`dgmm.compiled.scoring`). numba loads
+        only where a mixture scores."""
         if means.shape[1] != 3:
             from dgmm.compiled.scoring import screened_log_normalisers
 
@@ -350,10 +351,8 @@ class EStep:
             return np.concatenate([screened_log_normalisers(rows, SCREEN) for rows in blocks])
         from dgmm.compiled.e_step import moment_table, table_log_normalisers
 
-        coefficients, centre = np.ascontiguousarray(self.coefficients.T), np.asarray(self.centre, dtype=float)
-        chunks = [slice(start, start + _TABLE_CHUNK) for start in range(0, len(means), _TABLE_CHUNK)]
-        tables = (moment_table(means[rows], covariances[rows], centre, float(self.unit)) for rows in chunks)
-        return np.concatenate([np.empty(0)] + [table_log_normalisers(table, coefficients, SCREEN) for table in tables])
+        table = moment_table(means, covariances, np.asarray(self.centre, dtype=float), float(self.unit))
+        return table_log_normalisers(table, np.ascontiguousarray(self.coefficients.T), SCREEN)
 
     def _log_rho_rows(self, means, covariances, scale):
         """:meth:`log_rho_blocks` as (n_rows, n_components) blocks, each C-contiguous."""

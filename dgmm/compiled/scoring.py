@@ -36,4 +36,3 @@ def screened_log_normalisers(log_rho, screen):
                 total += math.exp(shifted)
         out[n] = peak + math.log(total)
     return out
-
