@@ -341,9 +341,9 @@ class EStep:
         """``logsumexp_i log rho`` of each primitive (n_rows,), the textbook E-step's, in one compiled pass a block,
         the terms below ``e^-SCREEN`` of a primitive's best left out (which changes no sum beyond rounding,
         :data:`dgmm.gaussian.SCREEN`): in 3-D from the moment table, ``log rho`` never written out
-        (:func:`dgmm.compiled.e_step.table_log_normalisers`; the table's 11 columns a row take less memory than the
-        primitives' covariances), else from BLAS's ``log rho`` blocks (:mod:`dgmm.compiled.scoring`). numba loads
-        only where a mixture scores."""
+        (:func:`dgmm.compiled.e_step.table_log_normalisers`; the table, 11 floats a row, is about the size of the
+        means and covariances it is made from, 12), else from BLAS's ``log rho`` blocks
+        (:mod:`dgmm.compiled.scoring`). numba loads only where a mixture scores."""
         if means.shape[1] != 3:
             from dgmm.compiled.scoring import screened_log_normalisers
 
